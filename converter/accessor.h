@@ -1,0 +1,51 @@
+// Bounds-checked reading and writing of glTF accessors. tiny_gltf.h stays behind converter/ and extensions/.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <tiny_gltf.h>
+
+#include "status.h"
+
+namespace segmorph {
+
+// Components per element of a tinygltf accessor type (TINYGLTF_TYPE_*), 0 when unknown.
+int components_of_type(int type);
+// Bytes of one component (TINYGLTF_COMPONENT_TYPE_*), 0 when unknown.
+int bytes_of_component(int component_type);
+
+// Reads accessor `index` as count × components floats, applying byteStride, normalization and sparse
+// substitution. Every offset is checked against its bufferView and buffer before it is read; an accessor
+// without bufferView reads as zeros, as the specification says. `what` names the accessor in errors.
+Status read_floats(const tinygltf::Model& model, int index, const std::string& what, std::vector<float>& out,
+                   int* components = nullptr);
+
+// Reads an integer accessor (indices, joints) as count × components unsigned values.
+Status read_uints(const tinygltf::Model& model, int index, const std::string& what, std::vector<uint32_t>& out,
+                  int* components = nullptr);
+
+// Builds a bufferView and accessor from new data and appends them to `model`, whose last buffer
+// receives the bytes (a fresh buffer is added when the model has none).
+class AccessorWriter {
+ public:
+  explicit AccessorWriter(tinygltf::Model& model);
+
+  // count × components floats of type TINYGLTF_TYPE_*; min/max are written when `bounds` is set
+  // (glTF requires them on POSITION). target: TINYGLTF_TARGET_ARRAY_BUFFER etc., 0 for none.
+  int add_floats(const float* data, size_t count, int type, bool bounds, int target);
+  // An accessor of `count` zero elements with no bufferView: glTF's compact form for all-zero data.
+  int add_zeros(size_t count, int type, bool bounds);
+  // A float accessor that is zero except for `indices` (strictly increasing element indices) whose
+  // elements are `values` (indices.size() × components floats): a sparse accessor with no bufferView.
+  int add_sparse_floats(size_t count, int type, const std::vector<uint32_t>& indices, const std::vector<float>& values);
+
+ private:
+  int add_view(const void* data, size_t bytes, int target);
+
+  tinygltf::Model& model_;
+  int buffer_;
+};
+
+}  // namespace segmorph

@@ -1,0 +1,226 @@
+#include "bake.h"
+
+#include <cmath>
+#include <map>
+
+#include "accessor.h"
+#include "normals.h"
+#include "topology.h"
+
+namespace segmorph {
+namespace {
+
+bool all_zero(const std::vector<float>& values) {
+  for (float v : values)
+    if (v != 0) return false;
+  return true;
+}
+
+// An object-valued extras with `key` set to `value` (other members kept).
+tinygltf::Value with_member(const tinygltf::Value& extras, const std::string& key, tinygltf::Value value) {
+  tinygltf::Value::Object object;
+  if (extras.IsObject()) object = extras.Get<tinygltf::Value::Object>();
+  object[key] = std::move(value);
+  return tinygltf::Value(std::move(object));
+}
+
+// Nodes reachable from each scene's roots.
+std::vector<std::vector<bool>> scene_members(const tinygltf::Model& model) {
+  std::vector<std::vector<bool>> members;
+  for (const tinygltf::Scene& scene : model.scenes) {
+    std::vector<bool> in(model.nodes.size(), false);
+    std::vector<int> stack(scene.nodes.begin(), scene.nodes.end());
+    while (!stack.empty()) {
+      const int n = stack.back();
+      stack.pop_back();
+      if (n < 0 || size_t(n) >= in.size() || in[size_t(n)]) continue;
+      in[size_t(n)] = true;
+      stack.insert(stack.end(), model.nodes[size_t(n)].children.begin(), model.nodes[size_t(n)].children.end());
+    }
+    members.push_back(std::move(in));
+  }
+  return members;
+}
+
+// The baked primitive: base frame, derived normals and tangents, one target per frame but the first.
+tinygltf::Primitive bake_primitive(const tinygltf::Primitive& original, const SampledPrimitive& sampled, bool skinned,
+                                   AccessorWriter& writer) {
+  tinygltf::Primitive primitive = original;
+  primitive.targets.clear();
+  if (skinned)
+    for (auto it = primitive.attributes.begin(); it != primitive.attributes.end();)
+      it = (it->first.rfind("JOINTS_", 0) == 0 || it->first.rfind("WEIGHTS_", 0) == 0) ? primitive.attributes.erase(it)
+                                                                                        : std::next(it);
+
+  const FrameSequence& first = sampled.clips[0];
+  const size_t vertex_count = first.vertex_count;
+  const float* base = first.frame(0);
+  primitive.attributes["POSITION"] =
+      writer.add_floats(base, vertex_count, TINYGLTF_TYPE_VEC3, true, TINYGLTF_TARGET_ARRAY_BUFFER);
+
+  const bool has_normals = !sampled.rest_normals.empty();
+  WeldedTopology topology;
+  std::vector<float> base_normals, frame_normals(vertex_count * 3);
+  std::vector<double> base_geometric;
+  if (has_normals || !sampled.rest_tangents.empty()) {
+    topology = weld_topology(sampled.clips);
+    const std::vector<double> rest_geometric = welded_vertex_normals(sampled.rest_positions.data(), topology);
+    if (has_normals) {
+      base_normals.resize(vertex_count * 3);
+      deform_normals(rest_geometric, sampled.rest_normals.data(), base, topology, base_normals.data());
+      primitive.attributes["NORMAL"] =
+          writer.add_floats(base_normals.data(), vertex_count, TINYGLTF_TYPE_VEC3, false, TINYGLTF_TARGET_ARRAY_BUFFER);
+      base_geometric = welded_vertex_normals(base, topology);
+    }
+    if (!sampled.rest_tangents.empty()) {
+      // Tangents turn with the surface from rest to the base frame; their handedness (w) is kept.
+      std::vector<float> directions(vertex_count * 3), turned(vertex_count * 3), tangents = sampled.rest_tangents;
+      for (size_t v = 0; v < vertex_count; ++v)
+        for (int c = 0; c < 3; ++c) directions[v * 3 + size_t(c)] = tangents[v * 4 + size_t(c)];
+      deform_normals(rest_geometric, directions.data(), base, topology, turned.data());
+      for (size_t v = 0; v < vertex_count; ++v)
+        for (int c = 0; c < 3; ++c) tangents[v * 4 + size_t(c)] = turned[v * 3 + size_t(c)];
+      primitive.attributes["TANGENT"] =
+          writer.add_floats(tangents.data(), vertex_count, TINYGLTF_TYPE_VEC4, false, TINYGLTF_TARGET_ARRAY_BUFFER);
+    }
+  }
+
+  std::vector<float> delta(vertex_count * 3);
+  for (size_t c = 0; c < sampled.clips.size(); ++c)
+    for (size_t f = (c == 0 ? 1 : 0); f < sampled.clips[c].frame_count; ++f) {
+      const float* frame = sampled.clips[c].frame(f);
+      std::map<std::string, int> target;
+      for (size_t i = 0; i < delta.size(); ++i) delta[i] = frame[i] - base[i];
+      target["POSITION"] = all_zero(delta) ? writer.add_zeros(vertex_count, TINYGLTF_TYPE_VEC3, true)
+                                           : writer.add_floats(delta.data(), vertex_count, TINYGLTF_TYPE_VEC3, true, 0);
+      if (has_normals) {
+        deform_normals(base_geometric, base_normals.data(), frame, topology, frame_normals.data());
+        for (size_t i = 0; i < delta.size(); ++i) delta[i] = frame_normals[i] - base_normals[i];
+        target["NORMAL"] = all_zero(delta) ? writer.add_zeros(vertex_count, TINYGLTF_TYPE_VEC3, false)
+                                           : writer.add_floats(delta.data(), vertex_count, TINYGLTF_TYPE_VEC3, false, 0);
+      }
+      primitive.targets.push_back(std::move(target));
+    }
+  return primitive;
+}
+
+}  // namespace
+
+Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled) {
+  AccessorWriter writer(model);
+  const std::vector<std::vector<bool>> members = scene_members(model);
+  std::vector<int> host(model.nodes.size(), -1);  // original animated node -> node carrying its baked mesh
+  std::vector<bool> baked_skin(model.skins.size(), false);
+  std::vector<size_t> target_count(sampled.size(), 0);
+
+  for (size_t i = 0; i < sampled.size(); ++i) {
+    const AnimatedNode& node = *sampled[i].node;
+    const bool skinned = node.skin >= 0;
+    tinygltf::Mesh mesh = model.meshes[size_t(node.mesh)];
+    mesh.weights.clear();
+    std::vector<tinygltf::Value> names;
+    for (size_t c = 0; c < node.clips.size(); ++c) {
+      const FrameSequence& clip = sampled[i].primitives[0].clips[c];
+      for (size_t f = (c == 0 ? 1 : 0); f < clip.frame_count; ++f)
+        names.emplace_back(scene.clips[size_t(node.clips[c])].name + " frame " + std::to_string(f));
+    }
+    target_count[i] = names.size();
+    mesh.extras = with_member(mesh.extras, "targetNames", tinygltf::Value(names));
+    for (size_t p = 0; p < mesh.primitives.size(); ++p)
+      mesh.primitives[p] = bake_primitive(mesh.primitives[p], sampled[i].primitives[p], skinned, writer);
+    model.meshes.push_back(std::move(mesh));
+    const int mesh_index = int(model.meshes.size()) - 1;
+
+    tinygltf::Value::Object provenance;
+    provenance["source_node"] = tinygltf::Value(node.node);
+    if (skinned) {
+      // Skinned vertices are in model space: the baked mesh hangs from a new root with no transform.
+      tinygltf::Node baked;
+      baked.name = model.nodes[size_t(node.node)].name;
+      baked.mesh = mesh_index;
+      baked.extras = with_member(baked.extras, "segmorph", tinygltf::Value(provenance));
+      tinygltf::Node& original = model.nodes[size_t(node.node)];
+      original.mesh = -1;
+      original.skin = -1;
+      original.weights.clear();
+      model.nodes.push_back(std::move(baked));
+      host.push_back(-1);
+      host[size_t(node.node)] = int(model.nodes.size()) - 1;
+      for (size_t s = 0; s < model.scenes.size(); ++s)
+        if (members[s][size_t(node.node)]) model.scenes[s].nodes.push_back(host[size_t(node.node)]);
+      baked_skin[size_t(node.skin)] = true;
+    } else {
+      tinygltf::Node& original = model.nodes[size_t(node.node)];
+      original.mesh = mesh_index;
+      original.weights.clear();
+      original.extras = with_member(original.extras, "segmorph", tinygltf::Value(provenance));
+      host[size_t(node.node)] = node.node;
+    }
+  }
+
+  // Nodes whose transforms still matter: they or a descendant carry a mesh, camera or extension, or are
+  // joints of a skin still in use. Joints of baked skins that matter to nothing lose their channels.
+  std::vector<bool> needed(model.nodes.size(), false), live_joint(model.nodes.size(), false),
+      baked_joint(model.nodes.size(), false);
+  for (const tinygltf::Node& node : model.nodes)
+    if (node.skin >= 0)
+      for (int joint : model.skins[size_t(node.skin)].joints) live_joint[size_t(joint)] = true;
+  for (size_t s = 0; s < model.skins.size(); ++s)
+    if (baked_skin[s])
+      for (int joint : model.skins[s].joints) baked_joint[size_t(joint)] = true;
+  std::vector<int> parent(model.nodes.size(), -1);
+  for (size_t n = 0; n < model.nodes.size(); ++n)
+    for (int child : model.nodes[n].children) parent[size_t(child)] = int(n);
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    const tinygltf::Node& node = model.nodes[n];
+    if (node.mesh >= 0 || node.camera >= 0 || !node.extensions.empty() || live_joint[n])
+      for (int m = int(n); m >= 0 && !needed[size_t(m)]; m = parent[size_t(m)]) needed[size_t(m)] = true;
+  }
+
+  for (size_t a = 0; a < model.animations.size(); ++a) {
+    tinygltf::Animation& animation = model.animations[a];
+    std::vector<tinygltf::AnimationChannel> channels;
+    for (const tinygltf::AnimationChannel& channel : animation.channels) {
+      const int n = channel.target_node;
+      const bool valid = n >= 0 && size_t(n) < host.size();
+      if (valid && channel.target_path == "weights" && host[size_t(n)] >= 0) continue;  // replaced below
+      if (valid && channel.target_path != "weights" && baked_joint[size_t(n)] && !needed[size_t(n)]) continue;
+      channels.push_back(channel);
+    }
+    for (size_t i = 0; i < sampled.size(); ++i) {
+      const AnimatedNode& node = *sampled[i].node;
+      for (size_t c = 0; c < node.clips.size(); ++c) {
+        if (size_t(scene.clips[size_t(node.clips[c])].animation) != a) continue;
+        const FrameSequence& clip = sampled[i].primitives[0].clips[c];
+        const size_t targets = target_count[i];
+        if (targets == 0) continue;  // a single frame: nothing to play
+        // Target of frame f of this clip: frames of earlier clips come first; the node's very first frame is the base.
+        size_t first_target = 0;
+        for (size_t d = 0; d < c; ++d) first_target += sampled[i].primitives[0].clips[d].frame_count;
+        std::vector<uint32_t> indices;
+        std::vector<float> ones;
+        for (size_t f = 0; f < clip.frame_count; ++f) {
+          if (c == 0 && f == 0) continue;
+          indices.push_back(uint32_t(f * targets + first_target + f - 1));
+          ones.push_back(1.0f);
+        }
+        tinygltf::AnimationSampler sampler;
+        sampler.input = writer.add_floats(clip.times.data(), clip.frame_count, TINYGLTF_TYPE_SCALAR, true, 0);
+        sampler.output = indices.empty()
+                             ? writer.add_zeros(clip.frame_count * targets, TINYGLTF_TYPE_SCALAR, false)
+                             : writer.add_sparse_floats(clip.frame_count * targets, TINYGLTF_TYPE_SCALAR, indices, ones);
+        sampler.interpolation = sampled[i].clip_is_step[c] ? "STEP" : "LINEAR";
+        animation.samplers.push_back(sampler);
+        tinygltf::AnimationChannel channel;
+        channel.sampler = int(animation.samplers.size()) - 1;
+        channel.target_node = host[size_t(node.node)];
+        channel.target_path = "weights";
+        channels.push_back(channel);
+      }
+    }
+    animation.channels = std::move(channels);
+  }
+  return Status::Ok();
+}
+
+}  // namespace segmorph

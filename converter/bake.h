@@ -1,0 +1,34 @@
+// The standard-glTF writer: animated primitives become morph targets played by one-hot weights animations.
+//
+// For every animated node, each frame of each clip that moves it becomes one morph target (POSITION deltas,
+// and NORMAL deltas when the primitive has normals) of a new mesh whose base is the first frame of the
+// node's first clip. Each clip gets a `weights` channel whose keys are the frame times and whose outputs are
+// one-hot, stored as a sparse accessor (zero everywhere but one entry per key), so the weights cost
+// O(frames) instead of O(frames²). Skinned nodes lose their skin: the baked mesh, in model space, goes on
+// a new root node, and animation channels of joints that no longer move anything are removed. Everything
+// else in the file is kept.
+//
+// Read back (base + 1 x delta in float), a frame is reproduced bit for bit whenever float addition can reach
+// it from the base: always for sequences stored as base + delta (the classic compression sequences), and
+// whenever a coordinate keeps its sign and stays within a factor 2 of the base. Elsewhere (a coordinate
+// crossing zero while the base's is large) the sum moves in steps of the base's precision, and the frame is
+// reproduced to within one ulp of the larger of the two magnitudes; no standard glTF encoding of a base plus
+// deltas does better.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <tiny_gltf.h>
+
+#include "sample.h"
+#include "status.h"
+
+namespace segmorph {
+
+// Replaces the animated nodes of `model` by their baked form. `sampled` holds one entry per node of
+// scene.animated, in that order.
+Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled);
+
+}  // namespace segmorph

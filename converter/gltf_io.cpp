@@ -1,0 +1,319 @@
+#include "gltf_io.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <set>
+
+namespace segmorph {
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && lower(s.substr(s.size() - suffix.size())) == suffix;
+}
+
+// tinygltf's messages may span lines; errors are reported on one.
+std::string one_line(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
+  std::string out;
+  for (char c : s) {
+    if (c == '\n') out += "; ";
+    else if (c != '\r') out += c;
+  }
+  return out;
+}
+
+// Keeps an image's encoded bytes as they are (tinygltf would decode them to pixels and re-encode on save).
+bool keep_encoded_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                        const unsigned char* bytes, int size, void*) {
+  image->image.assign(bytes, bytes + size);
+  image->as_is = true;
+  return true;
+}
+
+// Images are written from bufferViews, so tinygltf never has to write an image file of its own.
+bool write_no_image(const std::string*, const std::string*, const tinygltf::Image*, bool, std::string*, void*) {
+  return false;
+}
+
+// Extensions that store geometry in a form this reader does not decode.
+const char* const kUnreadableExtensions[] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression",
+                                             "KHR_meshopt_compression"};
+
+std::string mime_of_uri(const std::string& uri) {
+  if (uri.rfind("data:", 0) == 0) {
+    const size_t end = uri.find_first_of(";,");
+    return end == std::string::npos ? "" : uri.substr(5, end - 5);
+  }
+  if (ends_with(uri, ".png")) return "image/png";
+  if (ends_with(uri, ".jpg") || ends_with(uri, ".jpeg")) return "image/jpeg";
+  if (ends_with(uri, ".webp")) return "image/webp";
+  if (ends_with(uri, ".ktx2")) return "image/ktx2";
+  return "";
+}
+
+// Index remapping for one kind of object: old index -> new index, or -1 when dropped.
+struct Remap {
+  std::vector<int> to_new;
+  std::vector<int> kept;  // old indices in new order
+
+  explicit Remap(size_t n) : to_new(n, -1) {}
+  void keep(int old) {
+    if (old >= 0 && size_t(old) < to_new.size() && to_new[size_t(old)] < 0) {
+      to_new[size_t(old)] = 0;  // marked; numbered in finish()
+    }
+  }
+  void finish() {
+    for (size_t i = 0; i < to_new.size(); ++i)
+      if (to_new[i] >= 0) {
+        to_new[i] = int(kept.size());
+        kept.push_back(int(i));
+      }
+  }
+  int operator()(int old) const { return old >= 0 && size_t(old) < to_new.size() ? to_new[size_t(old)] : -1; }
+};
+
+template <typename T>
+std::vector<T> select(const std::vector<T>& items, const Remap& remap) {
+  std::vector<T> out;
+  out.reserve(remap.kept.size());
+  for (int old : remap.kept) out.push_back(items[size_t(old)]);
+  return out;
+}
+
+const char* const kInstancing = "EXT_mesh_gpu_instancing";
+
+// Calls f(accessor index&) for every accessor reference in the model.
+template <typename F>
+void for_each_accessor_ref(tinygltf::Model& model, F f) {
+  for (tinygltf::Mesh& mesh : model.meshes)
+    for (tinygltf::Primitive& primitive : mesh.primitives) {
+      for (auto& attribute : primitive.attributes) f(attribute.second);
+      if (primitive.indices >= 0) f(primitive.indices);
+      for (auto& target : primitive.targets)
+        for (auto& attribute : target) f(attribute.second);
+    }
+  for (tinygltf::Skin& skin : model.skins)
+    if (skin.inverseBindMatrices >= 0) f(skin.inverseBindMatrices);
+  for (tinygltf::Animation& animation : model.animations)
+    for (tinygltf::AnimationSampler& sampler : animation.samplers) {
+      f(sampler.input);
+      f(sampler.output);
+    }
+  for (tinygltf::Node& node : model.nodes) {
+    auto it = node.extensions.find(kInstancing);
+    if (it == node.extensions.end() || !it->second.IsObject() || !it->second.Has("attributes")) continue;
+    tinygltf::Value::Object extension = it->second.Get<tinygltf::Value::Object>();
+    if (!extension["attributes"].IsObject()) continue;
+    tinygltf::Value::Object attributes = extension["attributes"].Get<tinygltf::Value::Object>();
+    for (auto& attribute : attributes) {
+      if (!attribute.second.IsNumber()) continue;
+      int index = attribute.second.GetNumberAsInt();
+      f(index);
+      attribute.second = tinygltf::Value(index);
+    }
+    extension["attributes"] = tinygltf::Value(std::move(attributes));
+    it->second = tinygltf::Value(std::move(extension));
+  }
+}
+
+}  // namespace
+
+bool has_gltf_extension(const std::string& path) { return ends_with(path, ".glb") || ends_with(path, ".gltf"); }
+
+Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<std::string>* warnings) {
+  std::ifstream file(path, std::ios::binary);
+  struct stat info {};
+  if (!file || stat(path.c_str(), &info) != 0)
+    return Status(StatusCode::io_error, "cannot open: " + std::string(std::strerror(errno)));
+  if (S_ISDIR(info.st_mode)) return Status(StatusCode::io_error, "is a directory, not a glTF file");
+  char head[4] = {};
+  file.read(head, 4);
+  const bool binary = file.gcount() == 4 && std::memcmp(head, "glTF", 4) == 0;
+  if (!binary) {
+    // A JSON glTF starts with '{' after optional white space and byte-order mark.
+    file.clear();
+    file.seekg(0);
+    int c;
+    while ((c = file.get()) != EOF && (std::isspace(c) || c == 0xEF || c == 0xBB || c == 0xBF)) {
+    }
+    if (c != '{') return Status(StatusCode::bad_data, "not a glTF file (neither GLB nor JSON)");
+  }
+  file.close();
+
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(keep_encoded_image, nullptr);
+  std::string error, warning;
+  const bool loaded = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
+                             : loader.LoadASCIIFromFile(&model, &error, &warning, path);
+  if (!loaded) return Status(StatusCode::bad_data, "cannot parse glTF: " + one_line(error.empty() ? warning : error));
+  if (warnings && !warning.empty()) warnings->push_back(one_line(warning));
+
+  for (const char* name : kUnreadableExtensions) {
+    if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), name) != model.extensionsUsed.end())
+      return Status(StatusCode::unsupported, std::string("uses ") + name +
+                                                 ", which segmorph does not decode; decompress the file first");
+  }
+  return Status::Ok();
+}
+
+void repack(tinygltf::Model& model) {
+  // Meshes and skins in use.
+  Remap meshes(model.meshes.size()), skins(model.skins.size());
+  for (const tinygltf::Node& node : model.nodes) {
+    meshes.keep(node.mesh);
+    skins.keep(node.skin);
+  }
+  meshes.finish();
+  skins.finish();
+  for (tinygltf::Node& node : model.nodes) {
+    node.mesh = meshes(node.mesh);
+    node.skin = skins(node.skin);
+  }
+  model.meshes = select(model.meshes, meshes);
+  model.skins = select(model.skins, skins);
+
+  // Animation samplers in use, per animation.
+  for (tinygltf::Animation& animation : model.animations) {
+    Remap samplers(animation.samplers.size());
+    for (const tinygltf::AnimationChannel& channel : animation.channels) samplers.keep(channel.sampler);
+    samplers.finish();
+    for (tinygltf::AnimationChannel& channel : animation.channels) channel.sampler = samplers(channel.sampler);
+    animation.samplers = select(animation.samplers, samplers);
+  }
+
+  // Accessors in use.
+  Remap accessors(model.accessors.size());
+  for_each_accessor_ref(model, [&](int& index) { accessors.keep(index); });
+  accessors.finish();
+  for_each_accessor_ref(model, [&](int& index) { index = accessors(index); });
+  model.accessors = select(model.accessors, accessors);
+
+  // Images given by URI (data: or a file) move into bufferViews, so the output is self-contained.
+  tinygltf::Buffer packed;
+  std::vector<tinygltf::BufferView> image_views;  // appended after the kept views
+  for (tinygltf::Image& image : model.images) {
+    if (image.bufferView < 0 && !image.image.empty()) {
+      const std::string mime = image.mimeType.empty() ? mime_of_uri(image.uri) : image.mimeType;
+      if (!mime.empty()) {
+        image.mimeType = mime;
+        image.uri.clear();
+        image.bufferView = int(model.bufferViews.size() + image_views.size());
+        tinygltf::BufferView view;
+        view.buffer = int(model.buffers.size());  // placeholder buffer holding the image bytes
+        view.byteLength = image.image.size();
+        tinygltf::Buffer bytes;
+        bytes.data = image.image;
+        model.buffers.push_back(std::move(bytes));
+        image_views.push_back(view);
+      }
+    }
+    image.image.clear();
+    image.as_is = false;
+  }
+  model.bufferViews.insert(model.bufferViews.end(), image_views.begin(), image_views.end());
+
+  // BufferViews in use, copied into one buffer.
+  Remap views(model.bufferViews.size());
+  for (const tinygltf::Accessor& accessor : model.accessors) {
+    views.keep(accessor.bufferView);
+    if (accessor.sparse.isSparse) {
+      views.keep(accessor.sparse.indices.bufferView);
+      views.keep(accessor.sparse.values.bufferView);
+    }
+  }
+  for (const tinygltf::Image& image : model.images) views.keep(image.bufferView);
+  views.finish();
+  for (tinygltf::Accessor& accessor : model.accessors) {
+    accessor.bufferView = views(accessor.bufferView);
+    if (accessor.sparse.isSparse) {
+      accessor.sparse.indices.bufferView = views(accessor.sparse.indices.bufferView);
+      accessor.sparse.values.bufferView = views(accessor.sparse.values.bufferView);
+    }
+  }
+  for (tinygltf::Image& image : model.images) image.bufferView = views(image.bufferView);
+
+  std::vector<tinygltf::BufferView> kept_views = select(model.bufferViews, views);
+  for (tinygltf::BufferView& view : kept_views) {
+    const std::vector<unsigned char>& source = model.buffers[size_t(view.buffer)].data;
+    packed.data.resize((packed.data.size() + 3) / 4 * 4, 0);
+    const size_t offset = packed.data.size();
+    packed.data.insert(packed.data.end(), source.begin() + long(view.byteOffset),
+                       source.begin() + long(view.byteOffset + view.byteLength));
+    view.buffer = 0;
+    view.byteOffset = offset;
+  }
+  packed.data.resize((packed.data.size() + 3) / 4 * 4, 0);
+  model.bufferViews = std::move(kept_views);
+  model.buffers.clear();
+  if (!packed.data.empty()) model.buffers.push_back(std::move(packed));
+}
+
+Status save_gltf(tinygltf::Model& model, const std::string& path) {
+  const bool binary = ends_with(path, ".glb");
+  if (!binary && !ends_with(path, ".gltf"))
+    return Status(StatusCode::invalid_argument, "output must end in .glb or .gltf");
+  repack(model);
+
+  const size_t slash = path.find_last_of('/');
+  const std::string directory = slash == std::string::npos ? "." : path.substr(0, slash);
+  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  std::string temporary = directory + "/.segmorph-XXXXXX";
+  if (!mkdtemp(&temporary[0]))
+    return Status(StatusCode::io_error, "cannot write in " + directory + ": " + std::strerror(errno));
+
+  const std::string stem = name.substr(0, name.find_last_of('.'));
+  const std::string written = temporary + "/" + name;
+  const std::string written_bin = temporary + "/" + stem + ".bin";
+  auto clean_up = [&] {
+    std::remove(written.c_str());
+    std::remove(written_bin.c_str());
+    rmdir(temporary.c_str());
+  };
+
+  // tinygltf writes an object with no properties as null, which is invalid glTF; an empty node or scene
+  // (valid, and left behind when a skinned node's mesh moves to its baked node) gets its index as a name.
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    tinygltf::Node& node = model.nodes[n];
+    if (node.name.empty() && node.mesh < 0 && node.skin < 0 && node.camera < 0 && node.children.empty() &&
+        node.matrix.empty() && node.translation.empty() && node.rotation.empty() && node.scale.empty() &&
+        node.weights.empty() && node.extensions.empty() && node.extras.Type() == tinygltf::NULL_TYPE)
+      node.name = "node " + std::to_string(n);
+  }
+  for (size_t s = 0; s < model.scenes.size(); ++s) {
+    tinygltf::Scene& scene = model.scenes[s];
+    if (scene.name.empty() && scene.nodes.empty() && scene.extensions.empty() &&
+        scene.extras.Type() == tinygltf::NULL_TYPE)
+      scene.name = "scene " + std::to_string(s);
+  }
+
+  tinygltf::TinyGLTF writer;
+  writer.SetImageWriter(write_no_image, nullptr);
+  if (!binary && !model.buffers.empty()) model.buffers[0].uri.clear();  // tinygltf names it <stem>.bin
+  if (!writer.WriteGltfSceneToFile(&model, written, false, false, !binary, binary)) {
+    clean_up();
+    return Status(StatusCode::io_error, "cannot write " + path);
+  }
+  const std::string final_bin = directory + "/" + stem + ".bin";
+  if ((!binary && !model.buffers.empty() && std::rename(written_bin.c_str(), final_bin.c_str()) != 0) ||
+      std::rename(written.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    clean_up();
+    return Status(StatusCode::io_error, "cannot write " + path + ": " + reason);
+  }
+  clean_up();
+  return Status::Ok();
+}
+
+}  // namespace segmorph

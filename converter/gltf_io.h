@@ -1,0 +1,29 @@
+// Loading and saving whole glTF files (.gltf with its resources, or .glb).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <tiny_gltf.h>
+
+#include "status.h"
+
+namespace segmorph {
+
+// Loads `path`. Images are kept as their encoded bytes (never decoded), so they pass through unchanged.
+// Refuses what segmorph cannot read correctly: files whose geometry is compressed by an extension it does
+// not decode. Non-fatal remarks of the parser go to `warnings`.
+Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<std::string>* warnings = nullptr);
+
+// Drops meshes, skins, accessors, bufferViews and animation samplers nothing refers to, and packs all
+// remaining data, embedded images included, into one buffer.
+void repack(tinygltf::Model& model);
+
+// Repacks `model` and writes it to `path`, binary if it ends in .glb, JSON with a .bin beside it if it ends
+// in .gltf. The files appear whole or not at all: they are written under temporary names and renamed.
+Status save_gltf(tinygltf::Model& model, const std::string& path);
+
+// True when `path` ends in .glb or .gltf (case-insensitive).
+bool has_gltf_extension(const std::string& path);
+
+}  // namespace segmorph

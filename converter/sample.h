@@ -1,0 +1,71 @@
+// Finding the animated primitives of a glTF scene and sampling them into frame sequences.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <tiny_gltf.h>
+
+#include "animation.h"
+#include "frame_sequence.h"
+#include "status.h"
+
+namespace segmorph {
+
+// A node whose mesh's vertices move: its morph weights are animated, or its skin's joints are.
+struct AnimatedNode {
+  int node = -1;
+  int mesh = -1;
+  int skin = -1;              // -1 when not skinned
+  bool morphed = false;       // the mesh has morph targets (animated or not, they are applied)
+  bool weights_animated = false;
+  bool skin_animated = false;
+  std::vector<int> clips;     // indices into Scene::clips of the clips that move it
+
+  // "morph", "skinned" or "morph+skinned".
+  std::string kind() const;
+};
+
+struct Scene {
+  std::vector<Clip> clips;  // every animation of the file, in file order
+  NodeGraph graph;
+  std::vector<AnimatedNode> animated;  // in node order
+};
+
+// Reads the animations and finds the animated nodes. Fails with nothing_to_do when nothing moves vertices.
+Status analyze_scene(const tinygltf::Model& model, Scene& scene);
+
+struct SampleSettings {
+  // Frames per second of a regular grid; 0 selects the default: the union of the clip's key times
+  // when there are at most kMaxKeyRate of them per second, else a regular kDefaultFps grid.
+  double fps = 0;
+  static constexpr double kMaxKeyRate = 60;
+  static constexpr double kDefaultFps = 30;
+};
+
+// One primitive of an animated node, sampled over every clip that moves the node.
+struct SampledPrimitive {
+  int primitive = -1;                 // index in the mesh's primitives
+  std::vector<float> rest_positions;  // V × 3, the POSITION attribute as stored
+  std::vector<float> rest_normals;    // V × 3 unit normals, empty when the primitive has no NORMAL
+  std::vector<float> rest_tangents;   // V × 4, empty when the primitive has no TANGENT
+  std::vector<FrameSequence> clips;   // one per AnimatedNode::clips entry, same order
+};
+
+struct SampledNode {
+  const AnimatedNode* node = nullptr;
+  std::vector<bool> clip_is_step;     // per clip: every track that moves the node uses STEP
+  std::vector<SampledPrimitive> primitives;
+};
+
+// Frame times of `node` in clip `clip` (an index into scene.clips).
+std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model, const AnimatedNode& node,
+                               int clip, const SampleSettings& settings);
+
+// Samples every primitive of `node` over its clips. Positions are in the node's mesh space for morph-only
+// nodes and in model (world) space for skinned ones, as glTF renders them.
+Status sample_node(const tinygltf::Model& model, const Scene& scene, const AnimatedNode& node,
+                   const SampleSettings& settings, SampledNode& out);
+
+}  // namespace segmorph

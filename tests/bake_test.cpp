@@ -1,0 +1,214 @@
+#include "bake.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "accessor.h"
+#include "gltf_io.h"
+#include "sample.h"
+#include "test_files.h"
+
+namespace segmorph {
+namespace {
+
+using testing::bundled_samples;
+using testing::have_shared_samples;
+using testing::shared_samples;
+using testing::temporary_path;
+
+// A loaded and sampled file. Not movable: sampled nodes point into scene.
+struct Sampled {
+  tinygltf::Model model;
+  Scene scene;
+  std::vector<SampledNode> nodes;
+};
+
+std::unique_ptr<Sampled> sample_file(const std::string& path, Status* status) {
+  auto sampled = std::make_unique<Sampled>();
+  *status = load_gltf(path, sampled->model);
+  if (status->ok()) *status = analyze_scene(sampled->model, sampled->scene);
+  if (!status->ok()) return sampled;
+  sampled->nodes.resize(sampled->scene.animated.size());
+  for (size_t i = 0; i < sampled->nodes.size() && status->ok(); ++i)
+    *status = sample_node(sampled->model, sampled->scene, sampled->scene.animated[i], SampleSettings(), sampled->nodes[i]);
+  return sampled;
+}
+
+// One unit in the last place of the larger of |base| and |frame|: how far base + delta can be from a frame
+// that float addition cannot reach exactly (a frame near zero when the base is not).
+float within_ulp(float base, float frame) {
+  const float larger = std::max(std::fabs(base), std::fabs(frame));
+  return std::nextafter(larger, INFINITY) - larger;
+}
+
+int source_node(const tinygltf::Node& node) {
+  if (!node.extras.IsObject() || !node.extras.Has("segmorph")) return -1;
+  const tinygltf::Value& provenance = node.extras.Get("segmorph");
+  return provenance.Has("source_node") ? provenance.Get("source_node").GetNumberAsInt() : -1;
+}
+
+// Bakes `path`, reads the result back and checks that it plays the frames sampled from the input: bit for bit
+// where base + delta can represent them (always when `exact`, as for sequences stored that way), otherwise
+// within one ulp of the base coordinate.
+void expect_bake_round_trip(const std::string& path, bool exact) {
+  SCOPED_TRACE(path);
+  Status status;
+  std::unique_ptr<Sampled> original = sample_file(path, &status);
+  if (status.code() == StatusCode::nothing_to_do) return;  // e.g. morph targets without animation
+  ASSERT_TRUE(status.ok()) << status.message();
+
+  std::unique_ptr<Sampled> to_bake = sample_file(path, &status);
+  ASSERT_TRUE(status.ok());
+  ASSERT_TRUE(bake_model(to_bake->model, to_bake->scene, to_bake->nodes).ok());
+  const std::string baked_path = temporary_path("round_trip.glb");
+  ASSERT_TRUE(save_gltf(to_bake->model, baked_path).ok());
+
+  std::unique_ptr<Sampled> baked = sample_file(baked_path, &status);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(baked->nodes.size(), original->nodes.size());
+  EXPECT_TRUE(baked->model.skins.empty() || !original->model.skins.empty());
+
+  for (const SampledNode& expected : original->nodes) {
+    const SampledNode* actual = nullptr;
+    for (const SampledNode& candidate : baked->nodes)
+      if (source_node(baked->model.nodes[size_t(candidate.node->node)]) == expected.node->node) actual = &candidate;
+    ASSERT_NE(actual, nullptr) << "node " << expected.node->node << " has no baked counterpart";
+    EXPECT_EQ(actual->node->kind(), "morph");
+    ASSERT_EQ(actual->node->clips.size(), expected.node->clips.size());
+    ASSERT_EQ(actual->primitives.size(), expected.primitives.size());
+    for (size_t p = 0; p < expected.primitives.size(); ++p)
+      for (size_t c = 0; c < expected.node->clips.size(); ++c) {
+        const FrameSequence& want = expected.primitives[p].clips[c];
+        const FrameSequence& got = actual->primitives[p].clips[c];
+        EXPECT_EQ(got.times, want.times) << "primitive " << p << " clip " << c;
+        ASSERT_EQ(got.positions.size(), want.positions.size());
+        const float* base = expected.primitives[p].clips[0].frame(0);
+        const size_t values = want.vertex_count * 3;
+        size_t inexact = 0, too_far = 0;
+        for (size_t i = 0; i < want.positions.size(); ++i) {
+          inexact += got.positions[i] != want.positions[i];
+          too_far += std::fabs(got.positions[i] - want.positions[i]) > within_ulp(base[i % values], want.positions[i]);
+        }
+        EXPECT_EQ(too_far, 0u) << "primitive " << p << " clip " << c << ": values off by more than an ulp";
+        if (exact) {
+          EXPECT_EQ(inexact, 0u) << "primitive " << p << " clip " << c << ": values that differ";
+        }
+        EXPECT_EQ(got.triangles, want.triangles);
+      }
+  }
+
+  // The weights are sparse: no animation output of the baked channels has a dense bufferView.
+  for (const tinygltf::Animation& animation : baked->model.animations)
+    for (const tinygltf::AnimationChannel& channel : animation.channels)
+      if (channel.target_path == "weights") {
+        const tinygltf::Accessor& output = baked->model.accessors[size_t(animation.samplers[size_t(channel.sampler)].output)];
+        EXPECT_EQ(output.bufferView, -1);
+      }
+  // Nothing else is lost: materials, textures and images pass through, image bytes unchanged.
+  EXPECT_EQ(baked->model.materials.size(), original->model.materials.size());
+  EXPECT_EQ(baked->model.textures.size(), original->model.textures.size());
+  ASSERT_EQ(baked->model.images.size(), original->model.images.size());
+  EXPECT_EQ(baked->model.animations.size(), original->model.animations.size());
+}
+
+TEST(Bake, BundledSamplesRoundTrip) {
+  const std::vector<std::string> files = bundled_samples();
+  ASSERT_GE(files.size(), 5u) << "samples/ is missing files";
+  for (const std::string& path : files) expect_bake_round_trip(path, false);
+}
+
+TEST(Bake, SharedSamplesRoundTrip) {
+  if (!have_shared_samples()) GTEST_SKIP() << "../shared/samples is absent: the large samples are not tested";
+  for (const std::string& path : shared_samples())
+    expect_bake_round_trip(path, path.find("/sequences/") != std::string::npos);
+}
+
+// The sequences are one-hot morph animations whose frame f is exactly base + target f-1 at time f/30.
+TEST(Bake, SequencesSampleToTheirStoredFrames) {
+  if (!have_shared_samples()) GTEST_SKIP() << "../shared/samples is absent: the sequences are not tested";
+  const std::vector<std::string> files = testing::gltf_files_under(std::string(SEGMORPH_SHARED_SAMPLES_DIR) + "/sequences");
+  ASSERT_EQ(files.size(), 3u);
+  for (const std::string& path : files) {
+    SCOPED_TRACE(path);
+    Status status;
+    std::unique_ptr<Sampled> sampled = sample_file(path, &status);
+    ASSERT_TRUE(status.ok()) << status.message();
+    ASSERT_EQ(sampled->nodes.size(), 1u);
+    const tinygltf::Primitive& primitive = sampled->model.meshes[0].primitives[0];
+    const FrameSequence& clip = sampled->nodes[0].primitives[0].clips[0];
+    ASSERT_EQ(clip.frame_count, primitive.targets.size() + 1);
+    std::vector<float> base, delta;
+    ASSERT_TRUE(read_floats(sampled->model, primitive.attributes.at("POSITION"), "base", base).ok());
+    for (size_t f = 0; f < clip.frame_count; ++f) {
+      EXPECT_EQ(clip.times[f], float(f / 30.0)) << "frame " << f;
+      if (f > 0) {
+        ASSERT_TRUE(read_floats(sampled->model, primitive.targets[f - 1].at("POSITION"), "target", delta).ok());
+      }
+      size_t mismatches = 0;
+      for (size_t i = 0; i < base.size(); ++i) mismatches += clip.frame(f)[i] != (f ? base[i] + delta[i] : base[i]);
+      ASSERT_EQ(mismatches, 0u) << "frame " << f;
+    }
+  }
+}
+
+TEST(Bake, SkinnedNodesLoseTheirSkinAndJointChannels) {
+  Status status;
+  std::unique_ptr<Sampled> sampled = sample_file(std::string(SEGMORPH_SAMPLES_DIR) + "/Fox/Fox.glb", &status);
+  ASSERT_TRUE(status.ok()) << status.message();
+  const size_t nodes_before = sampled->model.nodes.size();
+  ASSERT_TRUE(bake_model(sampled->model, sampled->scene, sampled->nodes).ok());
+  repack(sampled->model);
+  tinygltf::Model& model = sampled->model;
+  EXPECT_TRUE(model.skins.empty());
+  EXPECT_EQ(model.nodes.size(), nodes_before + 1);  // the baked mesh's new root
+  for (const tinygltf::Mesh& mesh : model.meshes)
+    for (const tinygltf::Primitive& primitive : mesh.primitives) {
+      EXPECT_EQ(primitive.attributes.count("JOINTS_0"), 0u);
+      EXPECT_EQ(primitive.attributes.count("WEIGHTS_0"), 0u);
+      EXPECT_EQ(primitive.indices, -1);  // Fox has no index buffer, and keeps none
+    }
+  // The joints moved nothing else, so each clip is left with its one weights channel.
+  ASSERT_EQ(model.animations.size(), 3u);
+  for (const tinygltf::Animation& animation : model.animations) {
+    ASSERT_EQ(animation.channels.size(), 1u);
+    EXPECT_EQ(animation.channels[0].target_path, "weights");
+    EXPECT_EQ(animation.channels[0].target_node, int(nodes_before));
+  }
+  // The new node is a scene root.
+  const std::vector<int>& roots = model.scenes[size_t(std::max(model.defaultScene, 0))].nodes;
+  EXPECT_NE(std::find(roots.begin(), roots.end(), int(nodes_before)), roots.end());
+}
+
+TEST(Bake, RigidMeshesOnJointsKeepTheirChannels) {
+  if (!have_shared_samples()) GTEST_SKIP() << "../shared/samples is absent";
+  // RobotExpressive has meshes parented to bones without skinning (the head's morphed parts among them):
+  // their bones must keep animating.
+  Status status;
+  std::unique_ptr<Sampled> sampled =
+      sample_file(std::string(SEGMORPH_SHARED_SAMPLES_DIR) + "/gltf/RobotExpressive/RobotExpressive.glb", &status);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(bake_model(sampled->model, sampled->scene, sampled->nodes).ok());
+  const tinygltf::Model& model = sampled->model;
+  std::vector<int> parent(model.nodes.size(), -1);
+  for (size_t n = 0; n < model.nodes.size(); ++n)
+    for (int child : model.nodes[n].children) parent[size_t(child)] = int(n);
+  size_t rigid = 0;
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    if (model.nodes[n].mesh < 0 || parent[n] < 0) continue;
+    ++rigid;
+    for (int a = parent[n]; a >= 0; a = parent[size_t(a)])
+      for (size_t c = 0; c < sampled->scene.clips.size(); ++c) {
+        bool original = false, kept = false;
+        for (const Track& track : sampled->scene.clips[c].tracks) original = original || (track.node == a && track.path != TargetPath::weights);
+        for (const tinygltf::AnimationChannel& channel : model.animations[c].channels)
+          kept = kept || (channel.target_node == a && channel.target_path != "weights");
+        EXPECT_EQ(kept, original) << "ancestor " << a << " of mesh node " << n << " in clip " << c;
+      }
+  }
+  EXPECT_GT(rigid, 0u);
+}
+
+}  // namespace
+}  // namespace segmorph

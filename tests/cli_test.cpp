@@ -1,0 +1,177 @@
+// The command-line tool as a user meets it: exit codes, one-line errors, no partial output.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "test_files.h"
+
+namespace {
+
+using segmorph::testing::temporary_path;
+namespace fs = std::filesystem;
+
+struct Result {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string read_text(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+Result run(const std::string& arguments) {
+  const std::string out = temporary_path("cli.out"), err = temporary_path("cli.err");
+  const std::string command = std::string(SEGMORPH_BINARY) + " " + arguments + " >" + out + " 2>" + err + " </dev/null";
+  const int status = std::system(command.c_str());
+  Result result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.out = read_text(out);
+  result.err = read_text(err);
+  return result;
+}
+
+std::string sample(const std::string& relative) { return std::string(SEGMORPH_SAMPLES_DIR) + "/" + relative; }
+
+// A fresh directory for outputs, so leftovers are easy to see.
+std::string output_directory(const std::string& name) {
+  const std::string directory = temporary_path(name);
+  fs::remove_all(directory);
+  fs::create_directories(directory);
+  return directory;
+}
+
+// Runs bake with a bad input and checks the promise: exit 1, one line naming the file, no output, no leftovers.
+void expect_clean_failure(const std::string& input, const std::string& expected_message) {
+  SCOPED_TRACE(input);
+  const std::string directory = output_directory("failure");
+  const Result result = run("bake -q '" + input + "' -o " + directory + "/out.glb");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_NE(result.err.find(input), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find(expected_message), std::string::npos) << result.err;
+  EXPECT_TRUE(fs::is_empty(directory)) << "bake left files behind";
+}
+
+TEST(Cli, HelpAndVersion) {
+  Result help = run("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("bake IN -o OUT"), std::string::npos);
+  EXPECT_NE(help.out.find("info FILE"), std::string::npos);
+  EXPECT_EQ(run("--version").exit_code, 0);
+}
+
+TEST(Cli, UsageErrorsExitWithTwo) {
+  EXPECT_EQ(run("").exit_code, 2);
+  EXPECT_EQ(run("frobnicate x.glb").exit_code, 2);
+  EXPECT_EQ(run("bake " + sample("Fox/Fox.glb")).exit_code, 2);                  // no -o
+  EXPECT_EQ(run("bake " + sample("Fox/Fox.glb") + " -o out.obj").exit_code, 2);  // not glTF
+  EXPECT_EQ(run("info " + sample("Fox/Fox.glb") + " --fps abc").exit_code, 2);
+  EXPECT_EQ(run("info " + sample("Fox/Fox.glb") + " --fps -3").exit_code, 2);
+  EXPECT_EQ(run("info --bogus " + sample("Fox/Fox.glb")).exit_code, 2);
+  EXPECT_EQ(run("info a.glb b.glb").exit_code, 2);
+}
+
+TEST(Cli, BadInputsFailCleanly) {
+  const std::string directory = output_directory("inputs");
+  expect_clean_failure(directory + "/missing.glb", "cannot open");
+  expect_clean_failure(directory, "directory");
+
+  write_text(directory + "/text.gltf", "hello, I am not glTF\n");
+  expect_clean_failure(directory + "/text.gltf", "not a glTF file");
+
+  write_text(directory + "/broken.gltf", "{ \"asset\": { \"version\": \"2.0\" }, \"nodes\": [ {");
+  expect_clean_failure(directory + "/broken.gltf", "cannot parse");
+
+  const std::string fox = read_text(sample("Fox/Fox.glb"));
+  write_text(directory + "/truncated.glb", fox.substr(0, fox.size() / 2));
+  expect_clean_failure(directory + "/truncated.glb", "cannot parse");
+
+  write_text(directory + "/still.gltf", R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{}]})");
+  expect_clean_failure(directory + "/still.gltf", "nothing animated");
+
+  write_text(directory + "/draco.gltf",
+             R"({"asset":{"version":"2.0"},"extensionsUsed":["KHR_draco_mesh_compression"],)"
+             R"("extensionsRequired":["KHR_draco_mesh_compression"],"nodes":[{}]})");
+  expect_clean_failure(directory + "/draco.gltf", "KHR_draco_mesh_compression");
+
+  // SimpleMorph with its first accessor claiming more vertices than its bufferView holds.
+  std::string morph = read_text(sample("SimpleMorph/SimpleMorph.gltf"));
+  fs::copy_file(sample("SimpleMorph/simpleMorphGeometry.bin"), directory + "/simpleMorphGeometry.bin");
+  fs::copy_file(sample("SimpleMorph/simpleMorphAnimation.bin"), directory + "/simpleMorphAnimation.bin");
+  const size_t count = morph.find("\"count\"");
+  ASSERT_NE(count, std::string::npos);
+  morph.replace(count, morph.find_first_of(",}", count) - count, "\"count\" : 3000000");
+  write_text(directory + "/out_of_range.gltf", morph);
+  expect_clean_failure(directory + "/out_of_range.gltf", "accessor");
+}
+
+TEST(Cli, CorruptedInputsFailCleanlyOrBake) {
+  // Random byte changes and truncations of small samples: every run either bakes or fails with exit 1 and one
+  // line, and never leaves output behind on failure. (Crashes and memory errors show under the sanitizer build.)
+  std::mt19937 random(2024);
+  const std::string directory = output_directory("corrupt");
+  for (const char* name : {"AnimatedMorphCube/AnimatedMorphCube.glb", "SimpleSkin/SimpleSkin.gltf"}) {
+    const std::string original = read_text(sample(name));
+    const std::string extension = fs::path(name).extension().string();
+    for (int trial = 0; trial < 60; ++trial) {
+      std::string bytes = original;
+      const int changes = 1 + int(random() % 8);
+      for (int c = 0; c < changes; ++c) bytes[random() % bytes.size()] = char(random() % 256);
+      if (trial % 5 == 0) bytes.resize(random() % bytes.size());
+      const std::string input = directory + "/input" + extension, output = directory + "/out.glb";
+      write_text(input, bytes);
+      fs::remove(output);
+      const Result result = run("bake -q " + input + " -o " + output);
+      SCOPED_TRACE(std::string(name) + " trial " + std::to_string(trial));
+      ASSERT_TRUE(result.exit_code == 0 || result.exit_code == 1) << result.exit_code << " " << result.err;
+      if (result.exit_code == 1) {
+        EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+        EXPECT_FALSE(fs::exists(output));
+      }
+    }
+  }
+}
+
+TEST(Cli, UnwritableOutputFailsCleanly) {
+  const Result result = run("bake -q " + sample("SimpleSkin/SimpleSkin.gltf") + " -o " + temporary_path("no/such/dir/out.glb"));
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+}
+
+TEST(Cli, BakeWritesGlbAndGltfAndNothingElse) {
+  const std::string directory = output_directory("bake");
+  Result result = run("bake " + sample("Fox/Fox.glb") + " -o " + directory + "/fox.glb");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("sampling"), std::string::npos) << "progress goes to stderr";
+  result = run("bake -q " + sample("SimpleMorph/SimpleMorph.gltf") + " -o " + directory + "/morph.gltf");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(result.err.empty());
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(directory)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"fox.glb", "morph.bin", "morph.gltf"}));
+  EXPECT_NE(read_text(directory + "/morph.gltf").find("\"uri\": \"morph.bin\""), std::string::npos);
+}
+
+TEST(Cli, InfoReportsPrimitivesAndClips) {
+  Result result = run("info -q " + sample("Fox/Fox.glb"));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("skinned, 1728 vertices"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("\"Walk\""), std::string::npos) << result.out;
+  result = run("info -q --json " + sample("AnimatedMorphCube/AnimatedMorphCube.glb"));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  for (const char* key : {"\"kind\":\"morph\"", "\"vertices\":24", "\"triangles\":12", "\"connected_components\":1",
+                          "\"frames\":127", "\"baked_bytes\":36576"})
+    EXPECT_NE(result.out.find(key), std::string::npos) << key << " in " << result.out;
+}
+
+}  // namespace

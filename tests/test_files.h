@@ -1,0 +1,32 @@
+// Where the tests find sample files.
+#pragma once
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace segmorph::testing {
+
+// Every .glb and .gltf file below `directory`, sorted; empty when the directory does not exist.
+inline std::vector<std::string> gltf_files_under(const std::string& directory) {
+  std::vector<std::string> files;
+  std::error_code error;
+  if (!std::filesystem::is_directory(directory, error)) return files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(directory)) {
+    const std::string extension = entry.path().extension().string();
+    if (entry.is_regular_file() && (extension == ".glb" || extension == ".gltf")) files.push_back(entry.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+inline std::vector<std::string> bundled_samples() { return gltf_files_under(SEGMORPH_SAMPLES_DIR); }
+
+// ../shared/samples: present on developers' machines and in CI, absent on a bare clone.
+inline bool have_shared_samples() { return std::filesystem::is_directory(SEGMORPH_SHARED_SAMPLES_DIR); }
+inline std::vector<std::string> shared_samples() { return gltf_files_under(SEGMORPH_SHARED_SAMPLES_DIR); }
+
+inline std::string temporary_path(const std::string& name) { return std::string(SEGMORPH_TEST_TMP) + "/" + name; }
+
+}  // namespace segmorph::testing
