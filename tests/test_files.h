@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <filesystem>
+
+#include <gtest/gtest.h>
 #include <string>
 #include <vector>
 
@@ -27,6 +29,12 @@ inline std::vector<std::string> bundled_samples() { return gltf_files_under(SEGM
 inline bool have_shared_samples() { return std::filesystem::is_directory(SEGMORPH_SHARED_SAMPLES_DIR); }
 inline std::vector<std::string> shared_samples() { return gltf_files_under(SEGMORPH_SHARED_SAMPLES_DIR); }
 
-inline std::string temporary_path(const std::string& name) { return std::string(SEGMORPH_TEST_TMP) + "/" + name; }
+// A path in the tests' scratch directory, prefixed with the running test's name: ctest runs tests in
+// parallel processes, which must not share files.
+inline std::string temporary_path(const std::string& name) {
+  const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string prefix = test ? std::string(test->test_suite_name()) + "." + test->name() + "." : "";
+  return std::string(SEGMORPH_TEST_TMP) + "/" + prefix + name;
+}
 
 }  // namespace segmorph::testing
