@@ -124,4 +124,27 @@ WeldedTopology weld_topology(const std::vector<FrameSequence>& clips) {
   return topology;
 }
 
+VertexAdjacency vertex_adjacency(const WeldedTopology& topology) {
+  const size_t welded_count = topology.welded_count();
+  std::vector<std::pair<uint32_t, uint32_t>> edges;
+  edges.reserve(topology.triangles.size() * 2);
+  for (size_t t = 0; t < topology.triangles.size(); t += 3)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = topology.triangles[t + size_t(k)], b = topology.triangles[t + size_t((k + 1) % 3)];
+      edges.push_back({a, b});
+      edges.push_back({b, a});
+    }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  VertexAdjacency adjacency;
+  adjacency.offset.assign(welded_count + 1, 0);
+  adjacency.neighbour.reserve(edges.size());
+  for (const auto& edge : edges) {
+    ++adjacency.offset[edge.first + 1];
+    adjacency.neighbour.push_back(edge.second);
+  }
+  for (size_t w = 0; w < welded_count; ++w) adjacency.offset[w + 1] += adjacency.offset[w];
+  return adjacency;
+}
+
 }  // namespace segmorph

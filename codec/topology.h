@@ -29,6 +29,14 @@ struct WeldedTopology {
   size_t welded_count() const { return representative.size(); }
 };
 
+// Edge adjacency of the welded vertices in compressed-row form: the neighbours of w are
+// neighbour[offset[w] .. offset[w + 1]), sorted ascending.
+struct VertexAdjacency {
+  std::vector<uint32_t> offset;     // W + 1
+  std::vector<uint32_t> neighbour;
+};
+VertexAdjacency vertex_adjacency(const WeldedTopology& topology);
+
 // Welds the vertices of one primitive over all of its clips. Every clip must have the same vertex
 // count and triangles (they are samples of the same primitive); there must be at least one clip.
 // Vertices no triangle uses are components of their own.

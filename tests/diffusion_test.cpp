@@ -1,0 +1,73 @@
+#include "diffusion.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "laplacian.h"
+#include "test_meshes.h"
+
+namespace segmorph {
+namespace {
+
+using testing::stretched_sphere;
+
+TEST(Diffusion, FeaturePointsOfAnElongatedShapeAreItsTips) {
+  const FrameSequence clip = stretched_sphere(3, 4.0);  // 642 vertices, from x = -4 to 4
+  const WeldedTopology topology = weld_topology({clip});
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  const std::vector<double> positions = welded_positions(clip.frame(0), topology);
+  MorseFunction morse;
+  ASSERT_TRUE(diffusion_morse_function(positions, topology, adjacency, DiffusionSettings(), morse).ok());
+
+  // The two farthest points are the tips.
+  ASSERT_EQ(morse.farthest_points.size(), 1u);
+  const double x1 = positions[morse.farthest_points[0][0] * 3], x2 = positions[morse.farthest_points[0][1] * 3];
+  EXPECT_GT(std::fabs(x1), 3.5);
+  EXPECT_GT(std::fabs(x2), 3.5);
+  EXPECT_LT(x1 * x2, 0);
+  // The feature points are at the tips: both ends found, nothing in the middle.
+  bool left = false, right = false;
+  for (uint32_t p : morse.feature_points) {
+    EXPECT_GT(std::fabs(positions[p * 3]), 3.5) << "feature point at x = " << positions[p * 3];
+    left = left || positions[p * 3] < 0;
+    right = right || positions[p * 3] > 0;
+  }
+  EXPECT_TRUE(left && right);
+  // μ's level sets cut the shape across: on a thin slice x in [2, 2.25] μ varies by a small part of its range.
+  double low = INFINITY, high = -INFINITY, slice_low = INFINITY, slice_high = -INFINITY;
+  for (size_t w = 0; w < positions.size() / 3; ++w) {
+    low = std::min(low, morse.mu[w]);
+    high = std::max(high, morse.mu[w]);
+    if (positions[w * 3] >= 2.0 && positions[w * 3] <= 2.25) {
+      slice_low = std::min(slice_low, morse.mu[w]);
+      slice_high = std::max(slice_high, morse.mu[w]);
+    }
+  }
+  EXPECT_LT(slice_high - slice_low, 0.15 * (high - low));
+}
+
+TEST(Diffusion, ComponentsAreTreatedSeparately) {
+  // Two shapes side by side: each gets its own farthest points, feature points and μ.
+  FrameSequence a = stretched_sphere(2, 3.0), b = stretched_sphere(2, 3.0);
+  FrameSequence both = a;
+  both.vertex_count = a.vertex_count * 2;
+  for (size_t i = 0; i < b.positions.size(); ++i) both.positions.push_back(b.positions[i] + (i % 3 == 1 ? 10.0f : 0.0f));
+  for (uint32_t index : b.triangles) both.triangles.push_back(index + uint32_t(a.vertex_count));
+  const WeldedTopology topology = weld_topology({both});
+  ASSERT_EQ(topology.component_count, 2u);
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  MorseFunction morse;
+  ASSERT_TRUE(diffusion_morse_function(welded_positions(both.frame(0), topology), topology, adjacency,
+                                       DiffusionSettings(), morse).ok());
+  ASSERT_EQ(morse.farthest_points.size(), 2u);
+  EXPECT_NE(topology.component[morse.farthest_points[0][0]], topology.component[morse.farthest_points[1][0]]);
+  // The second shape is the first moved by 10 along y: the same μ, vertex for vertex, up to the float
+  // rounding of the moved positions (about 1e-6 relative).
+  for (size_t w = 0; w < a.vertex_count; ++w)
+    EXPECT_NEAR(morse.mu[topology.welded_index[w]], morse.mu[topology.welded_index[w + a.vertex_count]],
+                1e-5 * morse.mu[topology.welded_index[w]]);
+}
+
+}  // namespace
+}  // namespace segmorph

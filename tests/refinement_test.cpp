@@ -1,0 +1,96 @@
+#include "refinement.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "curvature.h"
+#include "laplacian.h"
+#include "test_meshes.h"
+
+namespace segmorph {
+namespace {
+
+using testing::height_field;
+
+TEST(Curvature, CylinderHasZeroMinimumCurvatureAndAValleyIsNegative) {
+  // A half cylinder of radius 10 along y, seen from outside (z = sqrt(100 − (x − 15)²)): κ_min ≈ 0 (along
+  // the axis) on the interior vertices; a valley crease z = 0.5 |x − 12| has κ_min < 0 on the crease.
+  const FrameSequence cylinder = height_field(30, [](int i, int) {
+    const double x = (i - 15) * 0.3;
+    return std::sqrt(100 - x * x);
+  });
+  WeldedTopology topology = weld_topology({cylinder});
+  std::vector<double> curvature = minimum_curvature(welded_positions(cylinder.frame(0), topology), topology);
+  for (int j = 2; j < 29; ++j)
+    for (int i = 2; i < 29; ++i) EXPECT_NEAR(curvature[size_t(j * 31 + i)], 0.0, 0.02) << i << " " << j;
+
+  const FrameSequence valley = height_field(30, [](int i, int) { return 0.5 * std::abs(i - 12); });
+  topology = weld_topology({valley});
+  curvature = minimum_curvature(welded_positions(valley.frame(0), topology), topology);
+  for (int j = 2; j < 29; ++j) {
+    EXPECT_LT(curvature[size_t(j * 31 + 12)], -0.1) << j;
+    EXPECT_NEAR(curvature[size_t(j * 31 + 5)], 0.0, 1e-9) << j;
+  }
+}
+
+TEST(Refinement, LevelMovesTowardsAConcaveCrease) {
+  // μ = x with one band level at x = 10; the surface is a smooth valley z = sqrt(1 + (x − 12.5)²), most
+  // concave at x = 12.5. The refined level's boundary (the first column with μ >= level) must be column 12
+  // or 13, nearer the valley than column 10.
+  const FrameSequence valley = height_field(30, [](int i, int) { return std::sqrt(1 + (i - 12.5) * (i - 12.5)); });
+  const WeldedTopology topology = weld_topology({valley});
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  const std::vector<double> positions = welded_positions(valley.frame(0), topology);
+  std::vector<double> mu;
+  for (size_t w = 0; w < topology.welded_count(); ++w) mu.push_back(positions[w * 3]);
+  MorseBands bands;
+  bands.levels = {{10.0}};
+  int iterations = 0;
+  const MorseBands refined = refine_levels(mu, minimum_curvature(positions, topology), topology, adjacency, bands,
+                                           RefinementSettings(), &iterations);
+  ASSERT_EQ(refined.levels[0].size(), 1u);
+  const double column = std::ceil(refined.levels[0][0]);
+  EXPECT_GE(column, 12.0);
+  EXPECT_LE(column, 13.0);
+  EXPECT_GE(iterations, 1);
+}
+
+TEST(Refinement, MotionRefinementMovesMislabelledVerticesHome) {
+  // Two halves of a grid move by different rotations; the initial split is off by two columns. Motion
+  // refinement must restore the true split, and E(Π) must fall to float rounding.
+  const FrameSequence grid = height_field(20, [](int, int) { return 0.0; });
+  const WeldedTopology topology = weld_topology({grid});
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  const size_t vertex_count = topology.welded_count();
+  Clusters truth, initial;
+  truth.count = initial.count = 2;
+  for (size_t v = 0; v < vertex_count; ++v) {
+    truth.label.push_back(grid.positions[v * 3] < 10 ? 0u : 1u);
+    initial.label.push_back(grid.positions[v * 3] < 8 ? 0u : 1u);
+  }
+  Trajectories frames;
+  frames.vertex_count = vertex_count;
+  frames.frame_count = 4;
+  for (int f = 0; f < 4; ++f)
+    for (size_t v = 0; v < vertex_count; ++v) {
+      const double angle = (truth.label[v] ? 0.3 : -0.2) * f;
+      const double x = grid.positions[v * 3] - 10, y = grid.positions[v * 3 + 1];
+      frames.positions.insert(frames.positions.end(), {float(x * std::cos(angle) + 10), float(y),
+                                                       float(x * std::sin(angle))});
+    }
+  const float* base = frames.frame(0);
+  const double before = motion_compensation_error(base, frames, initial, fit_affine_motion(base, frames, initial));
+  const Clusters refined = refine_by_motion(initial, base, frames, adjacency, 20);
+  const double after = motion_compensation_error(base, frames, refined, fit_affine_motion(base, frames, refined));
+  EXPECT_GT(before, 1e-4);
+  EXPECT_LT(after, 1e-10);
+  ASSERT_EQ(refined.count, 2u);
+  for (size_t v = 0; v < vertex_count; ++v)
+    if (std::fabs(grid.positions[v * 3] - 10) > 0.5) {
+      EXPECT_EQ(refined.label[v] == refined.label[0], truth.label[v] == 0) << v;
+    }
+}
+
+}  // namespace
+}  // namespace segmorph

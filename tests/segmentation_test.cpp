@@ -1,0 +1,91 @@
+#include "segmentation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "test_meshes.h"
+
+namespace segmorph {
+namespace {
+
+using testing::height_field;
+
+// An n × n grid of unit squares (two triangles each) in the plane z = 0, with the squares whose lower-left
+// corner (i, j) satisfies `hole` left out. Returns the welded topology, adjacency and base positions.
+struct Grid {
+  WeldedTopology topology;
+  VertexAdjacency adjacency;
+  std::vector<float> base;
+};
+
+template <typename Hole>
+Grid make_grid(int n, Hole hole) {
+  const FrameSequence clip = height_field(n, [](int, int) { return 0.0; }, hole);
+  Grid grid;
+  grid.topology = weld_topology({clip});
+  grid.adjacency = vertex_adjacency(grid.topology);
+  grid.base = clip.positions;
+  return grid;
+}
+
+TEST(Segmentation, BandsOfAStripMergeIntoOneCluster) {
+  const Grid grid = make_grid(20, [](int, int) { return false; });
+  std::vector<double> mu;
+  for (size_t v = 0; v < grid.topology.welded_count(); ++v) mu.push_back(grid.base[v * 3]);  // μ = x
+  MorseBands bands;
+  const Clusters clusters = morse_segmentation(mu, grid.topology, grid.adjacency, MorseSettings(), &bands);
+  EXPECT_EQ(clusters.count, 1u);
+  ASSERT_EQ(bands.levels.size(), 1u);
+  EXPECT_TRUE(bands.levels[0].empty());
+}
+
+TEST(Segmentation, AHoleSplitsTheBandsItCrosses) {
+  // A 30 × 30 grid with a slit (the squares over x in [10, 20), y in [10, 11) left out, so no vertex is left
+  // without triangles): with μ = x, bands left of the slit are one piece, bands across it two (below and
+  // above), bands right of it one: four clusters.
+  const Grid grid = make_grid(30, [](int i, int j) { return i >= 10 && i < 20 && j == 10; });
+  std::vector<double> mu;
+  for (size_t v = 0; v < grid.topology.welded_count(); ++v) mu.push_back(grid.base[v * 3]);
+  MorseSettings settings;
+  settings.intervals = 30;
+  const Clusters clusters = morse_segmentation(mu, grid.topology, grid.adjacency, settings);
+  EXPECT_EQ(clusters.count, 4u);
+  // The corners (0,0) and (30,30) are in different clusters; (15,0) and (15,30) too.
+  auto at = [&](int i, int j) { return clusters.label[size_t(j * 31 + i)]; };
+  EXPECT_NE(at(0, 0), at(30, 30));
+  EXPECT_NE(at(15, 0), at(15, 30));
+  EXPECT_EQ(at(0, 0), at(0, 30));
+  std::set<uint32_t> distinct(clusters.label.begin(), clusters.label.end());
+  EXPECT_EQ(distinct.size(), clusters.count);
+}
+
+TEST(Segmentation, MergeJoinsClustersThatMoveAlikeFirst) {
+  // Four vertical strips of a grid; strips 0 and 1 translate together, strips 2 and 3 rotate differently.
+  const Grid grid = make_grid(16, [](int, int) { return false; });
+  const size_t vertex_count = grid.topology.welded_count();
+  Clusters clusters;
+  clusters.count = 4;
+  for (size_t v = 0; v < vertex_count; ++v) clusters.label.push_back(uint32_t(std::min(3.0f, grid.base[v * 3] / 4.25f)));
+  Trajectories frames;
+  frames.vertex_count = vertex_count;
+  frames.frame_count = 3;
+  for (int f = 0; f < 3; ++f)
+    for (size_t v = 0; v < vertex_count; ++v) {
+      const float x = grid.base[v * 3], y = grid.base[v * 3 + 1];
+      const uint32_t k = clusters.label[v];
+      const float angle = k < 2 ? 0.0f : (k == 2 ? 0.2f : -0.3f) * float(f);
+      frames.positions.insert(frames.positions.end(), {x * std::cos(angle) - y * std::sin(angle) + float(f),
+                                                       x * std::sin(angle) + y * std::cos(angle), 0.0f});
+    }
+  const Clusters merged = merge_clusters(clusters, 3, grid.base.data(), frames, grid.adjacency);
+  ASSERT_EQ(merged.count, 3u);
+  auto strip = [&](int s) { return merged.label[size_t(s * 4 + 1)]; };  // a vertex of strip s on the first row
+  EXPECT_EQ(strip(0), strip(1));
+  EXPECT_NE(strip(1), strip(2));
+  EXPECT_NE(strip(2), strip(3));
+}
+
+}  // namespace
+}  // namespace segmorph
