@@ -108,8 +108,9 @@ Status rayleigh_ritz(const SparseMatrix& stiffness, const Eigen::VectorXd& mass,
 }
 
 // `count` Lanczos vectors of the smallest eigenvalues on the M-orthogonal complement of `locked`.
-Status lanczos(const Factorization& factorization, const Eigen::VectorXd& mass, double sigma, const Eigen::MatrixXd& locked,
-               Eigen::Index count, const EigenSettings& settings, Eigen::MatrixXd& vectors) {
+Status lanczos(const Factorization& factorization, const Eigen::VectorXd& mass, double sigma,
+               const Eigen::MatrixXd& locked, Eigen::Index count, const EigenSettings& settings,
+               Eigen::MatrixXd& vectors) {
   const Eigen::Index n = mass.size();
   // Lanczos basis size: Spectra advises at least twice the wanted pairs; +20 helps small counts converge.
   // It cannot exceed the dimension of the space searched.

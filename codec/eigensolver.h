@@ -29,8 +29,8 @@ namespace segmorph {
 
 struct Eigenpairs {
   // n eigenvalues λ, ascending, in 1/(units of the positions)². K is positive semidefinite, so values
-  // below 0 can only be rounding and are returned as 0; the first value of a connected mesh is 0 (up to
-  // ~1e-12 of the largest eigenvalue of K) with a constant eigenvector.
+  // below 0 can only be rounding and are returned as 0; the first value of a connected mesh is 0 up to
+  // rounding (below 1e-10 of the next one in the tests) with a constant eigenvector.
   Eigen::VectorXd values;
   // W × n, column-major, column i the eigenvector φ_i of values[i]. M-orthonormal: ΦᵀMΦ = I.
   // Deterministic sign: in each column the entry of largest magnitude is positive (on exact ties the
@@ -49,7 +49,7 @@ struct EigenSettings {
   size_t dense_limit = 300;  // vertices
   // Spectra's convergence test: each Ritz value ν = 1/(λ − σ) has a residual below tolerance · |ν|.
   double tolerance = 1e-10;
-  int max_restarts = 1000;   // implicit restarts of the Lanczos iteration before giving up
+  int max_restarts = 1000;  // implicit restarts of the Lanczos iteration before giving up
 };
 
 // Shift of the shift-invert mode: σ = −kShiftAreaFraction / (Σ mass). The first nonzero eigenvalue of a

@@ -109,7 +109,9 @@ Status cotangent_laplacian(const std::vector<double>& positions, const std::vect
     }
   }
   for (size_t i = 0; i < vertex_count; ++i) {
-    if (diagonal[Eigen::Index(i)] != 0) entries.emplace_back(Eigen::Index(i), Eigen::Index(i), diagonal[Eigen::Index(i)]);
+    if (diagonal[Eigen::Index(i)] != 0) {
+      entries.emplace_back(Eigen::Index(i), Eigen::Index(i), diagonal[Eigen::Index(i)]);
+    }
   }
   for (const auto& entry : entries) {
     if (!std::isfinite(entry.value())) {

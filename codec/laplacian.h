@@ -7,7 +7,7 @@
 //
 // Degenerate triangles (zero area, zero-length edges: collinear corners, points that touch in the first
 // frame and only separate later) are handled by intrinsic mollification (Sharp & Crane 2020, "A Laplacian
-// for Nonmanifold Triangle Meshes", §4.5): every edge length is lengthened by the same small δ, just
+// for Nonmanifold Triangle Meshes"): every edge length is lengthened by the same small δ, just
 // enough that every triangle satisfies the triangle inequality with a margin ε = kMollificationMargin of
 // the mean edge length, and the operator is built from those lengths. Cotangents then stay finite
 // instead of becoming inf/NaN: about sqrt(l/δ) ~ 300 for a triangle with collinear corners, about
@@ -48,14 +48,14 @@ struct CotangentLaplacian {
 // triangles (1 in absolute units when no vertex has one).
 constexpr double kIsolatedMassFraction = 1e-8;
 
-// Mollification margin ε, as a fraction of the mean edge length of the triangles (the default of
-// Sharp & Crane's reference implementation).
+// Mollification margin ε, as a fraction of the mean edge length of the triangles (the default of Sharp
+// & Crane's robust-laplacians package; libigl's tufted_cover_laplacian uses 1e-6).
 constexpr double kMollificationMargin = 1e-5;
 
 // Builds K and M. positions: W × 3 doubles, row-major (positions[3 * w + c]); triangles: T × 3 indices
 // into W (such as WeldedTopology::triangles; indices out of range are the caller's bug); a triangle with
-// a repeated corner is no triangle and is ignored. Fails with
-// bad_data when a position is not finite or so large that squared lengths overflow. O(T + W) time.
+// a repeated corner is no triangle and is ignored. Fails with bad_data when a position is not finite or
+// so large that squared lengths overflow. O(T + W) time.
 Status cotangent_laplacian(const std::vector<double>& positions, const std::vector<uint32_t>& triangles,
                            CotangentLaplacian& out);
 

@@ -1,0 +1,58 @@
+// The segmorph animation codec: Hachani, Ouled Zaid & Puech's segmentation-based scheme, with the
+// improvements documented in docs/codec.md. Encodes the clips of one primitive against the base mesh
+// positions the decoder will have (the container's Draco-decoded first frame), and decodes them back.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "frame_sequence.h"
+#include "status.h"
+
+namespace segmorph {
+
+enum class RateMode {
+  error,     // target: KG error in percent
+  bpvf,      // target: bits per vertex per frame of the whole output
+  lossless,  // restore the input floats bit for bit
+};
+
+struct CodecSettings {
+  RateMode mode = RateMode::error;
+  double target = 0.15;          // KG % (error) or bits per vertex per frame (bpvf)
+  size_t clusters = 0;           // K; 0 chooses automatically
+  // Stages of the paper that can be switched off, and additions beyond it (measured in docs/codec.md).
+  bool curvature_refinement = true;  // Eq. 6
+  bool motion_refinement = true;     // beyond the paper: boundary vertices follow the best-fitting motion
+  bool blend_weights = true;         // Eq. 3; off: each vertex follows its own cluster only
+  bool temporal_residuals = true;    // beyond the paper: residuals predicted from the previous frame's
+  // Bytes of the output outside this stream (the base mesh, the container) that a bpvf target includes.
+  size_t outside_bytes = 0;
+};
+
+struct EncodeReport {
+  size_t clusters = 0;
+  double e_pi_before_refinement = 0;  // E(Π) of the Morse segmentation (Table 2's definition)
+  double e_pi = 0;                    // E(Π) after refinement
+  int refinement_iterations = 0;
+  double residual_steps[3] = {0, 0, 0};
+  double kg_percent = 0;               // of the encoder's own reconstruction
+  size_t bytes_motion = 0, bytes_residuals = 0, bytes_total = 0;
+  // Milliseconds per stage.
+  double ms_segmentation = 0, ms_motion = 0, ms_prediction = 0, ms_rate_control = 0, ms_entropy = 0;
+};
+
+// clips: the primitive's clips (same V and triangles; frame 0 of clip 0 is the base frame). base: V × 3, the
+// base positions exactly as the decoder will have them. On success `stream` holds the encoded bytes and
+// `reconstruction` (if given) the frames a decoder will produce, bit for bit.
+Status encode_animation(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
+                        const CodecSettings& settings, std::vector<uint8_t>& stream, EncodeReport* report = nullptr,
+                        std::vector<FrameSequence>* reconstruction = nullptr);
+
+// Decodes a stream against the base positions (V × 3). The clips come back with their positions (frame
+// times are the container's business and are left empty). Never reads outside [data, data + size).
+Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
+                        std::vector<FrameSequence>& clips);
+
+}  // namespace segmorph

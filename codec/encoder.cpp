@@ -1,0 +1,341 @@
+// encode_animation: segmentation, motion, closed-loop prediction, rate control, entropy coding.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "codec.h"
+#include "curvature.h"
+#include "diffusion.h"
+#include "laplacian.h"
+#include "metrics.h"
+#include "rate_control.h"
+#include "reconstruction.h"
+#include "refinement.h"
+#include "segmentation.h"
+#include "stream_format.h"
+#include "topology.h"
+
+namespace segmorph {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double milliseconds_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Automatic cluster count: the Morse segmentation's own count, capped so the motion side information stays a
+// small part of the stream (measured in docs/codec.md).
+constexpr size_t kMaxAutomaticClusters = 24;
+// Weights are multiples of 2^-8.
+constexpr int kWeightBits = 8;
+// Motion quantizer steps relative to the mean residual step: translation β q̄, linear β q̄ / (RMS radius).
+constexpr double kMotionStepRatio = 0.5;
+
+Status check_input(const std::vector<FrameSequence>& clips, const std::vector<float>& base) {
+  if (clips.empty()) return Status(StatusCode::invalid_argument, "no clips to encode");
+  const size_t vertex_count = clips[0].vertex_count;
+  if (vertex_count == 0) return Status(StatusCode::invalid_argument, "no vertices to encode");
+  if (base.size() != vertex_count * 3) return Status(StatusCode::invalid_argument, "the base mesh has another vertex count");
+  for (const FrameSequence& clip : clips) {
+    if (clip.vertex_count != vertex_count || clip.triangles != clips[0].triangles || clip.frame_count == 0 ||
+        clip.positions.size() != clip.frame_count * vertex_count * 3)
+      return Status(StatusCode::invalid_argument, "clips of one primitive must share vertices and triangles");
+    for (float x : clip.positions)
+      if (!std::isfinite(x)) return Status(StatusCode::invalid_argument, "a frame has a NaN or infinite position");
+  }
+  for (float x : base)
+    if (!std::isfinite(x)) return Status(StatusCode::invalid_argument, "the base mesh has a NaN or infinite position");
+  return Status::Ok();
+}
+
+// ‖A − E(A)‖²_F over the original vertices of every frame (the KG error's denominator).
+double frame_spread(const std::vector<FrameSequence>& clips) {
+  double spread = 0;
+  for (const FrameSequence& clip : clips)
+    for (size_t f = 0; f < clip.frame_count; ++f) {
+      const float* frame = clip.frame(f);
+      double centroid[3] = {0, 0, 0};
+      for (size_t v = 0; v < clip.vertex_count; ++v)
+        for (int c = 0; c < 3; ++c) centroid[c] += frame[v * 3 + size_t(c)];
+      for (double& c : centroid) c /= double(clip.vertex_count);
+      for (size_t v = 0; v < clip.vertex_count; ++v)
+        for (int c = 0; c < 3; ++c) spread += (frame[v * 3 + size_t(c)] - centroid[c]) * (frame[v * 3 + size_t(c)] - centroid[c]);
+    }
+  return spread;
+}
+
+void quantize_motion(const AffineMotion& fitted, double linear_step, double translation_step, StreamContent& content) {
+  content.linear_step = float(linear_step);
+  content.translation_step = float(translation_step);
+  const double linear = content.linear_step, translation = content.translation_step;
+  content.motion.resize(fitted.transforms.size());
+  for (size_t f = 0; f < fitted.frame_count; ++f)
+    for (size_t k = 0; k < fitted.cluster_count; ++k) {
+      const double* t = fitted.transform(f, k);
+      int32_t* q = &content.motion[(f * fitted.cluster_count + k) * 12];
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) q[r * 3 + c] = int32_t(std::llround((t[r * 4 + c] - (r == c ? 1.0 : 0.0)) / linear));
+        q[9 + r] = int32_t(std::llround((t[r * 4 + 3] - fitted.centroid[k * 3 + size_t(r)]) / translation));
+      }
+    }
+}
+
+void quantize_weights(const ClusterWeights& weights, StreamContent& content) {
+  content.weight_bits = kWeightBits;
+  const double scale = double(1 << kWeightBits);
+  content.weight_offset.assign(1, 0);
+  content.weight_cluster.clear();
+  content.weight_value.clear();
+  for (size_t w = 0; w < content.welded_count; ++w) {
+    // The extra clusters with the largest weights, at most kMaxExtraWeights, rounded; zeros dropped.
+    std::vector<std::pair<double, uint32_t>> extra;
+    for (uint32_t i = weights.offset[w]; i < weights.offset[w + 1]; ++i)
+      if (weights.cluster[i] != content.labels[w]) extra.push_back({weights.weight[i], weights.cluster[i]});
+    std::sort(extra.begin(), extra.end(), [](const auto& a, const auto& b) { return std::fabs(a.first) > std::fabs(b.first); });
+    extra.resize(std::min<size_t>(extra.size(), format::kMaxExtraWeights));
+    std::sort(extra.begin(), extra.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+    for (const auto& [weight, cluster] : extra) {
+      const int32_t value = int32_t(std::llround(weight * scale));
+      if (value == 0) continue;
+      content.weight_cluster.push_back(cluster);
+      content.weight_value.push_back(std::clamp(value, -(1 << 20), 1 << 20));
+    }
+    content.weight_offset.push_back(uint32_t(content.weight_cluster.size()));
+  }
+}
+
+}  // namespace
+
+Status encode_animation(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
+                        const CodecSettings& settings, std::vector<uint8_t>& stream, EncodeReport* report_out,
+                        std::vector<FrameSequence>* reconstruction) {
+  SEGMORPH_RETURN_IF_ERROR(check_input(clips, base));
+  if (settings.mode != RateMode::lossless && !(settings.target > 0))
+    return Status(StatusCode::invalid_argument, "the rate target must be positive");
+  EncodeReport report;
+  const size_t vertex_count = clips[0].vertex_count;
+  const WeldedTopology topology = weld_topology(clips);
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+
+  StreamContent content;
+  content.flags = (settings.mode == RateMode::lossless ? format::kFlagLossless : 0) |
+                  (settings.temporal_residuals ? format::kFlagTemporalResiduals : 0);
+  content.vertex_count = uint32_t(vertex_count);
+  content.welded_index = topology.welded_index;
+  content.welded_count = uint32_t(topology.welded_count());
+  for (const FrameSequence& clip : clips) content.clip_frames.push_back(uint32_t(clip.frame_count));
+  const size_t welded = content.welded_count, frames_total = content.frame_count();
+  if (uint64_t(frames_total) * vertex_count > format::kMaxVertexFrames)
+    return Status(StatusCode::invalid_argument, "too many frames × vertices for one stream");
+
+  // Welded trajectories, and the decoder's welded base.
+  Trajectories trajectories;
+  trajectories.vertex_count = welded;
+  trajectories.frame_count = frames_total;
+  trajectories.positions.reserve(frames_total * welded * 3);
+  for (const FrameSequence& clip : clips)
+    for (size_t f = 0; f < clip.frame_count; ++f)
+      for (uint32_t v : topology.representative)
+        for (int c = 0; c < 3; ++c) trajectories.positions.push_back(clip.frame(f)[v * 3 + size_t(c)]);
+  const std::vector<float> base_welded = welded_base(base, content);
+  std::vector<uint32_t> multiplicity(welded, 0);
+  for (uint32_t w : topology.welded_index) ++multiplicity[w];
+
+  // Segmentation (on the first frame as sampled), refinement, cluster count.
+  auto start = Clock::now();
+  const std::vector<double> positions = welded_positions(clips[0].frame(0), topology);
+  MorseFunction morse;
+  SEGMORPH_RETURN_IF_ERROR(diffusion_morse_function(positions, topology, adjacency, DiffusionSettings(), morse));
+  MorseBands bands;
+  const MorseSettings morse_settings;
+  Clusters clusters = morse_segmentation(morse.mu, topology, adjacency, morse_settings, &bands);
+  report.e_pi_before_refinement =
+      motion_compensation_error(base_welded.data(), trajectories, clusters,
+                                fit_affine_motion(base_welded.data(), trajectories, clusters));
+  if (settings.curvature_refinement) {
+    const MorseBands refined = refine_levels(morse.mu, minimum_curvature(positions, topology), topology, adjacency,
+                                             bands, RefinementSettings(), &report.refinement_iterations);
+    clusters = clusters_from_levels(morse.mu, topology, adjacency, refined, morse_settings);
+  }
+  const size_t target_clusters = settings.clusters ? settings.clusters : kMaxAutomaticClusters;
+  clusters = merge_clusters(clusters, target_clusters, base_welded.data(), trajectories, adjacency);
+  if (settings.motion_refinement) {
+    int iterations = 0;
+    clusters = refine_by_motion(clusters, base_welded.data(), trajectories, adjacency, 8, &iterations);
+    report.refinement_iterations += iterations;
+  }
+  const AffineMotion fitted = fit_affine_motion(base_welded.data(), trajectories, clusters);
+  report.e_pi = motion_compensation_error(base_welded.data(), trajectories, clusters, fitted);
+  report.clusters = clusters.count;
+  content.cluster_count = uint32_t(clusters.count);
+  content.labels = clusters.label;
+  report.ms_segmentation = milliseconds_since(start);
+
+  // The scale of the residual steps: from the target error when there is one, else from the motion error.
+  const double spread = frame_spread(clips);
+  const double samples = 3.0 * double(vertex_count) * double(frames_total);
+  double mean_step = std::sqrt(12.0 * std::max(report.e_pi, 1e-12)) * bounding_box_diagonal(base.data(), vertex_count) * 0.1;
+  if (settings.mode == RateMode::error)
+    mean_step = std::sqrt(12.0 * spread / samples) * settings.target / 100.0;
+  double radius = 0;
+  for (size_t w = 0; w < welded; ++w)
+    for (int c = 0; c < 3; ++c) {
+      const double d = base_welded[w * 3 + size_t(c)] - fitted.centroid[clusters.label[w] * 3 + size_t(c)];
+      radius += d * d;
+    }
+  radius = std::sqrt(radius / double(welded)) + 1e-30;
+
+  std::vector<double> predictions;
+  StepChoice choice;
+  SubbandCurve curves[3];
+  // Measures more candidate steps of one subband and adds them to its curve.
+  auto extend = [&](int axis, const std::vector<double>& steps) {
+    const SubbandCurve more = measure_subband(predictions, trajectories.positions, content.clip_frames, multiplicity,
+                                              axis, settings.temporal_residuals, steps);
+    SubbandCurve& curve = curves[axis];
+    curve.step.insert(curve.step.end(), more.step.begin(), more.step.end());
+    curve.distortion.insert(curve.distortion.end(), more.distortion.begin(), more.distortion.end());
+    curve.bits.insert(curve.bits.end(), more.bits.begin(), more.bits.end());
+  };
+  // Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1..±3), after
+  // widening the range while a choice sits on its edge (very low or very high targets).
+  auto refine = [&](StepChoice& choice_, auto choose_) {
+    for (int widen = 0; widen < 6; ++widen) {
+      bool widened = false;
+      for (int axis = 0; axis < 3; ++axis) {
+        const std::vector<double>& measured = curves[axis].step;
+        const double chosen = measured[choice_.index[axis]];
+        const bool top = chosen == *std::max_element(measured.begin(), measured.end());
+        const bool bottom = chosen == *std::min_element(measured.begin(), measured.end());
+        if (!top && !bottom) continue;
+        std::vector<double> beyond;
+        for (int j = 1; j <= 4; ++j) beyond.push_back(chosen * std::exp2(top ? j : -j));
+        extend(axis, beyond);
+        widened = true;
+      }
+      if (!widened) break;
+      choice_ = choose_();
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double> fine;
+      for (int j = -3; j <= 3; ++j)
+        if (j != 0) fine.push_back(curves[axis].step[choice_.index[axis]] * std::exp2(j / 4.0));
+      extend(axis, fine);
+    }
+    choice_ = choose_();
+  };
+  // Two passes: the motion steps follow the residual steps, which depend on the prediction.
+  for (int pass = 0; pass < 2; ++pass) {
+    start = Clock::now();
+    const double motion_step = kMotionStepRatio * mean_step;
+    quantize_motion(fitted, settings.mode == RateMode::lossless ? 1e-6 : motion_step / radius,
+                    settings.mode == RateMode::lossless ? 1e-6 * radius : motion_step, content);
+    const AffineMotion motion = dequantized_motion(content, base_welded);
+    const ClusterWeights weights =
+        settings.blend_weights ? fit_cluster_weights(base_welded.data(), trajectories, clusters, motion,
+                                                     adjacency.offset, adjacency.neighbour, 2, 4)
+                               : own_cluster_weights(clusters);
+    quantize_weights(weights, content);
+    report.ms_motion += milliseconds_since(start);
+    start = Clock::now();
+    predictions = predicted_frames(content, base_welded);
+    report.ms_prediction += milliseconds_since(start);
+    if (settings.mode == RateMode::lossless) break;
+
+    start = Clock::now();
+    // Coarse to fine: every fourth candidate step first, then the neighbours of each subband's choice.
+    std::vector<double> coarse;
+    for (size_t j = 0; j < candidate_steps(mean_step).size(); j += 4) coarse.push_back(candidate_steps(mean_step)[j]);
+    double residual_budget = 0;
+    if (settings.mode == RateMode::bpvf) {
+      // Budget for the residuals: the target minus what the rest of the output costs.
+      content.residuals.clear();
+      std::vector<uint8_t> side;
+      write_stream(content, base, side);
+      residual_budget = std::max(0.0, settings.target * double(vertex_count) * double(frames_total) -
+                                          8.0 * double(side.size() + settings.outside_bytes));
+    }
+    auto choose = [&] {
+      return settings.mode == RateMode::error
+                 ? steps_for_distortion(curves, std::pow(settings.target / 100.0, 2) * spread)
+                 : steps_for_bits(curves, residual_budget);
+    };
+    for (int axis = 0; axis < 3; ++axis)
+      curves[axis] = measure_subband(predictions, trajectories.positions, content.clip_frames, multiplicity, axis,
+                                     settings.temporal_residuals, coarse);
+    choice = choose();
+    refine(choice, choose);
+    for (int axis = 0; axis < 3; ++axis) content.residual_step[axis] = float(curves[axis].step[choice.index[axis]]);
+    mean_step = (content.residual_step[0] + content.residual_step[1] + content.residual_step[2]) / 3.0;
+    report.ms_rate_control += milliseconds_since(start);
+  }
+
+  // Residual symbols by the decoder's own loop, then the stream.
+  const bool lossless = settings.mode == RateMode::lossless;
+  std::vector<float> decoded(predictions.size());
+  StreamSizes sizes;
+  auto encode_residuals = [&] {
+    content.residuals.assign(predictions.size(), 0);
+    residual_loop(
+        content, predictions,
+        [&](size_t index, double p, double r) -> int64_t {
+          const float x = trajectories.positions[index];
+          if (lossless) return content.residuals[index] = ordered_bits(x) - ordered_bits(float(p + r));
+          return content.residuals[index] = std::llround((double(x) - p - r) / double(content.residual_step[index % 3]));
+        },
+        [&](size_t index, float x) { decoded[index] = x; });
+    stream.clear();
+    write_stream(content, base, stream, &sizes);
+  };
+  start = Clock::now();
+  encode_residuals();
+  if (settings.mode == RateMode::bpvf) {
+    // The rate estimate is an estimate: correct the residual budget by what the coder really produced until
+    // the output lands within 3 % below the target.
+    const double target_bits = settings.target * double(vertex_count) * double(frames_total);
+    double budget = choice.bits;
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      const double actual = 8.0 * double(stream.size() + settings.outside_bytes);
+      if (actual <= target_bits && actual >= 0.97 * target_bits) break;
+      const double residual_actual = 8.0 * double(sizes.residuals);
+      const double residual_target = target_bits - (actual - residual_actual);
+      if (!(residual_target > 0) || !(residual_actual > 0)) break;
+      budget *= residual_target / residual_actual * (actual > target_bits ? 0.995 : 1.0);
+      auto choose_budget = [&] { return steps_for_bits(curves, budget); };
+      choice = choose_budget();
+      refine(choice, choose_budget);
+      for (int axis = 0; axis < 3; ++axis) content.residual_step[axis] = float(curves[axis].step[choice.index[axis]]);
+      encode_residuals();
+    }
+  }
+  report.ms_entropy = milliseconds_since(start);
+  report.bytes_motion = sizes.motion;
+  report.bytes_residuals = sizes.residuals;
+  report.bytes_total = stream.size();
+  for (int axis = 0; axis < 3; ++axis) report.residual_steps[axis] = content.residual_step[axis];
+
+  // The reconstruction, in the original vertex order, and its error.
+  std::vector<FrameSequence> restored(clips.size());
+  ErrorAccumulator accumulator;
+  size_t frame = 0;
+  for (size_t c = 0; c < clips.size(); ++c) {
+    FrameSequence& clip = restored[c];
+    clip.vertex_count = vertex_count;
+    clip.frame_count = clips[c].frame_count;
+    clip.times = clips[c].times;
+    clip.triangles = clips[c].triangles;
+    clip.positions.resize(clip.frame_count * vertex_count * 3);
+    for (size_t f = 0; f < clip.frame_count; ++f, ++frame)
+      for (size_t v = 0; v < vertex_count; ++v)
+        for (int a = 0; a < 3; ++a)
+          clip.positions[(f * vertex_count + v) * 3 + size_t(a)] =
+              decoded[(frame * welded + topology.welded_index[v]) * 3 + size_t(a)];
+    accumulator.add(clips[c], clip);
+  }
+  report.kg_percent = accumulator.result().kg_percent;
+  if (reconstruction) *reconstruction = std::move(restored);
+  if (report_out) *report_out = report;
+  return Status::Ok();
+}
+
+}  // namespace segmorph

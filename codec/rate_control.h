@@ -1,0 +1,44 @@
+// Rate control of the residuals (Hachani et al., §2.3, Eqs. 7–12): per coordinate subband (x, y, z) a
+// quantizer step is chosen by a Lagrangian trade-off of distortion against rate, the multiplier λ found by
+// bisection so that the whole stream meets its target (a KG error, or a size).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace segmorph {
+
+// Distortion and rate of one subband at each candidate step: D in squared model units summed over all its
+// samples (vertex multiplicities included), R in bits (estimated from the symbols' conditional entropy).
+struct SubbandCurve {
+  std::vector<double> step, distortion, bits;
+};
+
+// Candidate steps: `around` × 2^(j/4) for j in [−24, 24].
+std::vector<double> candidate_steps(double around);
+
+// Closed-loop D(q) and R(q) of one axis for every step (same arithmetic as the decoder's residual loop).
+// predictions, targets: F × W × 3; clip_frames: frames per clip; multiplicity: W (original vertices per
+// welded vertex); temporal: residuals predicted from the previous frame's.
+SubbandCurve measure_subband(const std::vector<double>& predictions, const std::vector<float>& targets,
+                             const std::vector<uint32_t>& clip_frames, const std::vector<uint32_t>& multiplicity,
+                             int axis, bool temporal, const std::vector<double>& steps);
+
+struct StepChoice {
+  size_t index[3] = {0, 0, 0};  // into each curve
+  double distortion = 0, bits = 0;
+};
+
+// The Lagrangian choice for multiplier λ: per subband the step minimizing D + λR.
+StepChoice choose_steps(const SubbandCurve (&curves)[3], double lambda);
+
+// Bisection on λ (the paper's method), then every combination of measured steps (the curves are not convex,
+// so the Lagrangian alone can miss the best feasible choice): the cheapest choice with total distortion <=
+// max_distortion.
+StepChoice steps_for_distortion(const SubbandCurve (&curves)[3], double max_distortion);
+
+// The same search for the least distorted choice with residual bits <= max_bits.
+StepChoice steps_for_bits(const SubbandCurve (&curves)[3], double max_bits);
+
+}  // namespace segmorph

@@ -1,0 +1,75 @@
+#include "reconstruction.h"
+
+namespace segmorph {
+
+std::vector<float> welded_base(const std::vector<float>& base, const StreamContent& content) {
+  std::vector<float> welded(size_t(content.welded_count) * 3);
+  std::vector<bool> done(content.welded_count, false);
+  for (size_t v = 0; v < content.welded_index.size(); ++v) {
+    const uint32_t w = content.welded_index[v];
+    if (done[w]) continue;
+    done[w] = true;
+    for (int c = 0; c < 3; ++c) welded[w * 3 + size_t(c)] = base[v * 3 + size_t(c)];
+  }
+  return welded;
+}
+
+AffineMotion dequantized_motion(const StreamContent& content, const std::vector<float>& welded) {
+  Clusters clusters;
+  clusters.count = content.cluster_count;
+  clusters.label = content.labels;
+  AffineMotion motion;
+  motion.cluster_count = content.cluster_count;
+  motion.frame_count = content.frame_count();
+  motion.centroid = cluster_centroids(welded.data(), clusters);
+  motion.transforms.resize(content.motion.size());
+  const double linear = content.linear_step, translation = content.translation_step;
+  for (size_t f = 0; f < motion.frame_count; ++f)
+    for (size_t k = 0; k < motion.cluster_count; ++k) {
+      const int32_t* q = &content.motion[(f * motion.cluster_count + k) * 12];
+      double* transform = motion.transform(f, k);
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) transform[r * 4 + c] = (r == c ? 1.0 : 0.0) + double(q[r * 3 + c]) * linear;
+        transform[r * 4 + 3] = motion.centroid[k * 3 + size_t(r)] + double(q[9 + r]) * translation;
+      }
+    }
+  return motion;
+}
+
+ClusterWeights dequantized_weights(const StreamContent& content) {
+  ClusterWeights weights;
+  weights.offset.assign(1, 0);
+  const double unit = 1.0 / double(uint32_t(1) << content.weight_bits);
+  for (size_t w = 0; w < content.welded_count; ++w) {
+    // The own cluster first, with what the extra clusters leave of 1.
+    int64_t extra_sum = 0;
+    for (uint32_t i = content.weight_offset[w]; i < content.weight_offset[w + 1]; ++i) extra_sum += content.weight_value[i];
+    weights.cluster.push_back(content.labels[w]);
+    weights.weight.push_back(double((int64_t(1) << content.weight_bits) - extra_sum) * unit);
+    for (uint32_t i = content.weight_offset[w]; i < content.weight_offset[w + 1]; ++i) {
+      weights.cluster.push_back(content.weight_cluster[i]);
+      weights.weight.push_back(double(content.weight_value[i]) * unit);
+    }
+    weights.offset.push_back(uint32_t(weights.cluster.size()));
+  }
+  return weights;
+}
+
+std::vector<double> predicted_frames(const StreamContent& content, const std::vector<float>& welded) {
+  const AffineMotion motion = dequantized_motion(content, welded);
+  const ClusterWeights weights = dequantized_weights(content);
+  const size_t row = size_t(content.welded_count) * 3;
+  std::vector<double> predictions(content.frame_count() * row);
+  for (size_t f = 0; f < content.frame_count(); ++f) predict_frame(welded.data(), motion, weights, f, &predictions[f * row]);
+  return predictions;
+}
+
+std::vector<float> reconstruct_welded(const StreamContent& content, const std::vector<double>& predictions) {
+  std::vector<float> frames(predictions.size());
+  residual_loop(
+      content, predictions, [&](size_t index, double, double) { return content.residuals[index]; },
+      [&](size_t index, float x) { frames[index] = x; });
+  return frames;
+}
+
+}  // namespace segmorph

@@ -1,0 +1,40 @@
+// How a decoder turns stream content into frames. The encoder runs the same functions on its own quantized
+// values (closed loop), so its reconstruction is the decoder's, bit for bit: every sum below is evaluated in
+// IEEE binary64 in the order written (no contraction; see codec/CMakeLists.txt).
+#pragma once
+
+#include <vector>
+
+#include "motion.h"
+#include "stream.h"
+
+namespace segmorph {
+
+// Welded base positions: base (V × 3) read at the first vertex of each welded vertex.
+std::vector<float> welded_base(const std::vector<float>& base, const StreamContent& content);
+
+// The affine motion the stream describes (centroids from the welded base and the labels).
+AffineMotion dequantized_motion(const StreamContent& content, const std::vector<float>& welded);
+
+// The cluster weights the stream describes.
+ClusterWeights dequantized_weights(const StreamContent& content);
+
+// Predicted positions of every frame: F × W × 3 doubles.
+std::vector<double> predicted_frames(const StreamContent& content, const std::vector<float>& welded);
+
+// The residual loop shared by encoder and decoder. For each clip, frame, welded vertex and axis in that
+// order, with p the prediction and r the previous frame's reconstructed residual of the same vertex and
+// axis (0 at a clip's first frame, or always when temporal residuals are off):
+//   lossy:    x = float(p + (r + k · step[axis]))          and the new r is r + k · step[axis]
+//   lossless: x = from_ordered_bits(ordered_bits(float(p + r)) + k)   and the new r is x − p
+// `symbol(index, p, r)` returns k for the symbol at `index` (the encoder computes it from its target, the
+// decoder reads it); `output(index, x)` receives each reconstructed coordinate.
+template <typename Symbol, typename Output>
+void residual_loop(const StreamContent& content, const std::vector<double>& predictions, Symbol symbol, Output output);
+
+// Frames (welded, F × W × 3 floats) of a complete content.
+std::vector<float> reconstruct_welded(const StreamContent& content, const std::vector<double>& predictions);
+
+}  // namespace segmorph
+
+#include "reconstruction_inl.h"

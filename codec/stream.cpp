@@ -1,0 +1,303 @@
+#include "stream.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+
+#include "range_coder.h"
+#include "stream_format.h"
+
+namespace segmorph {
+namespace {
+
+int bits_for(uint32_t count) {  // bits of a bit tree that can code 0 .. count − 1
+  int bits = 0;
+  while (bits < 32 && (uint64_t(1) << bits) < count) ++bits;
+  return bits;
+}
+
+uint32_t float_bits(float x) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, 4);
+  return bits;
+}
+
+float bits_float(uint32_t bits) {
+  float x;
+  std::memcpy(&x, &bits, 4);
+  return x;
+}
+
+// The adaptive contexts of a stream, in one place so that writer and reader cannot disagree.
+struct Models {
+  UnsignedModel count;                  // header counts
+  BitModel group_welded;                // a group of identical base positions is one welded vertex
+  UnsignedModel group_member;           // else: earlier member each member equals, or "new"
+  std::array<SignedModel, 12> motion;   // per coefficient slot, deltas from the previous frame
+  BitTreeModel extra_count{2};          // extra clusters per vertex (0..3)
+  SignedModel weight;
+  // Residuals by axis and by the magnitude of the same vertex's symbol in the previous frame (0, 1, more).
+  std::array<SignedModel, 9> residual;
+  std::array<UnsignedModel, 3> lossless_escape;
+};
+
+int residual_context(size_t axis, int64_t previous) {
+  const int64_t magnitude = previous < 0 ? -previous : previous;
+  return int(axis) * 3 + int(std::min<int64_t>(magnitude, 2));
+}
+
+constexpr int32_t kEscape = INT32_MIN;  // a lossless difference outside int32 follows as two 32-bit halves
+
+}  // namespace
+
+size_t StreamContent::frame_count() const {
+  return std::accumulate(clip_frames.begin(), clip_frames.end(), size_t(0));
+}
+
+int64_t ordered_bits(float x) {
+  const uint32_t bits = float_bits(x);
+  return (bits & 0x80000000u) ? -int64_t(bits & 0x7fffffffu) - 1 : int64_t(bits);
+}
+
+float from_ordered_bits(int64_t value) {
+  if (value < 0) return bits_float(uint32_t(-(value + 1)) | 0x80000000u);
+  return bits_float(uint32_t(value));
+}
+
+std::vector<std::vector<uint32_t>> identical_position_groups(const std::vector<float>& base) {
+  const size_t vertex_count = base.size() / 3;
+  std::vector<uint32_t> order(vertex_count);
+  std::iota(order.begin(), order.end(), 0u);
+  auto key = [&](uint32_t v) {
+    return std::array<uint32_t, 3>{float_bits(base[v * 3]), float_bits(base[v * 3 + 1]), float_bits(base[v * 3 + 2])};
+  };
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  std::vector<std::vector<uint32_t>> groups;
+  std::vector<uint32_t> group_of(vertex_count);
+  for (size_t i = 0; i < vertex_count; ++i) {
+    if (i == 0 || key(order[i]) != key(order[i - 1])) groups.emplace_back();
+    groups.back().push_back(order[i]);
+    group_of[order[i]] = uint32_t(groups.size() - 1);
+  }
+  // Renumber groups in order of their first vertex.
+  std::vector<std::vector<uint32_t>> ordered;
+  std::vector<bool> seen(groups.size(), false);
+  for (uint32_t v = 0; v < vertex_count; ++v)
+    if (!seen[group_of[v]]) {
+      seen[group_of[v]] = true;
+      ordered.push_back(std::move(groups[group_of[v]]));
+    }
+  return ordered;
+}
+
+void write_stream(const StreamContent& content, const std::vector<float>& base, std::vector<uint8_t>& out,
+                  StreamSizes* sizes) {
+  const size_t start = out.size();
+  out.insert(out.end(), std::begin(format::kMagic), std::end(format::kMagic));
+  out.push_back(format::kVersion);
+  out.push_back(content.flags);
+  const size_t length_at = out.size();
+  out.insert(out.end(), 4, 0);  // body length, filled in at the end
+  RangeEncoder encoder(out);
+  Models models;
+
+  models.count.encode(encoder, content.vertex_count);
+  models.count.encode(encoder, uint32_t(content.clip_frames.size()));
+  for (uint32_t frames : content.clip_frames) models.count.encode(encoder, frames);
+
+  // Welding, group by group (groups of identical base positions, which the decoder finds itself): one bit
+  // "the group is one welded vertex"; otherwise, for each member after the first, the position within the
+  // group of the earlier member it welds to, or its own position when it starts a new welded vertex.
+  for (const std::vector<uint32_t>& group : identical_position_groups(base)) {
+    if (group.size() < 2) continue;
+    bool one = true;
+    for (uint32_t v : group) one = one && content.welded_index[v] == content.welded_index[group[0]];
+    encoder.encode_bit(models.group_welded, one ? 1 : 0);
+    if (one) continue;
+    for (size_t j = 1; j < group.size(); ++j) {
+      size_t target = j;
+      for (size_t i = 0; i < j && target == j; ++i)
+        if (content.welded_index[group[i]] == content.welded_index[group[j]]) target = i;
+      models.group_member.encode(encoder, uint32_t(target));
+    }
+  }
+
+  models.count.encode(encoder, content.cluster_count);
+  BitTreeModel label_model(bits_for(content.cluster_count));
+  for (uint32_t label : content.labels) label_model.encode(encoder, label);
+
+  encoder.encode_direct_bits(float_bits(content.linear_step), 32);
+  encoder.encode_direct_bits(float_bits(content.translation_step), 32);
+  const size_t clusters = content.cluster_count;
+  for (size_t f = 0; f < content.frame_count(); ++f)
+    for (size_t k = 0; k < clusters; ++k)
+      for (size_t c = 0; c < 12; ++c) {
+        const size_t index = (f * clusters + k) * 12 + c;
+        const int32_t previous = f == 0 ? 0 : content.motion[index - clusters * 12];
+        models.motion[c].encode(encoder, content.motion[index] - previous);
+      }
+
+  models.count.encode(encoder, uint32_t(content.weight_bits));
+  BitTreeModel cluster_model(bits_for(content.cluster_count));
+  for (size_t w = 0; w < content.welded_count; ++w) {
+    models.extra_count.encode(encoder, content.weight_offset[w + 1] - content.weight_offset[w]);
+    for (uint32_t i = content.weight_offset[w]; i < content.weight_offset[w + 1]; ++i) {
+      cluster_model.encode(encoder, content.weight_cluster[i]);
+      models.weight.encode(encoder, content.weight_value[i]);
+    }
+  }
+  const size_t motion_end = out.size();
+
+  const bool lossless = content.flags & format::kFlagLossless;
+  for (int axis = 0; axis < 3; ++axis) encoder.encode_direct_bits(float_bits(content.residual_step[axis]), 32);
+  const size_t row = size_t(content.welded_count) * 3;
+  for (size_t index = 0; index < content.residuals.size(); ++index) {
+    const size_t axis = index % 3;
+    const int64_t previous = index >= row ? content.residuals[index - row] : 0;
+    const int64_t value = content.residuals[index];
+    SignedModel& model = models.residual[size_t(residual_context(axis, previous))];
+    if (!lossless || (value > kEscape && value <= INT32_MAX)) {
+      model.encode(encoder, int32_t(value));
+    } else {
+      model.encode(encoder, kEscape);
+      const uint64_t bits = uint64_t(value);
+      encoder.encode_direct_bits(uint32_t(bits >> 32), 32);
+      encoder.encode_direct_bits(uint32_t(bits), 32);
+    }
+  }
+  encoder.finish();
+  const uint32_t length = uint32_t(out.size() - length_at - 4);
+  for (int i = 0; i < 4; ++i) out[length_at + size_t(i)] = uint8_t(length >> (8 * i));
+  if (sizes) {
+    sizes->motion = motion_end - start;
+    sizes->residuals = out.size() - motion_end;
+  }
+}
+
+Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& base, StreamContent& content) {
+  content = StreamContent();
+  if (size < format::kHeaderBytes || std::memcmp(data, format::kMagic, 4) != 0)
+    return Status(StatusCode::bad_data, "not a segmorph animation stream (bad magic)");
+  if (data[4] != format::kVersion)
+    return Status(StatusCode::unsupported, "animation stream version " + std::to_string(data[4]) +
+                                               " (this decoder reads version " + std::to_string(format::kVersion) + ")");
+  content.flags = data[5];
+  if (content.flags & ~format::kKnownFlags) return Status(StatusCode::bad_data, "animation stream has unknown flags");
+  const uint32_t length = uint32_t(data[6]) | uint32_t(data[7]) << 8 | uint32_t(data[8]) << 16 | uint32_t(data[9]) << 24;
+  if (length != size - format::kHeaderBytes)
+    return Status(StatusCode::bad_data, length > size - format::kHeaderBytes ? "animation stream is truncated"
+                                                                            : "animation stream has trailing bytes");
+  RangeDecoder decoder(data + format::kHeaderBytes, size - format::kHeaderBytes);
+  Models models;
+  auto corrupt = [](const std::string& what) { return Status(StatusCode::bad_data, "animation stream: " + what); };
+
+  content.vertex_count = models.count.decode(decoder);
+  if (decoder.failed()) return decoder.finish();
+  if (content.vertex_count != base.size() / 3)
+    return corrupt("it is for " + std::to_string(content.vertex_count) + " vertices, the base mesh has " +
+                   std::to_string(base.size() / 3));
+  const uint32_t clips = models.count.decode(decoder);
+  if (decoder.failed() || clips == 0 || clips > format::kMaxClips) return corrupt("bad clip count");
+  uint64_t total_frames = 0;
+  for (uint32_t c = 0; c < clips; ++c) {
+    const uint32_t frames = models.count.decode(decoder);
+    total_frames += frames;
+    if (decoder.failed() || frames == 0 || total_frames * content.vertex_count > format::kMaxVertexFrames)
+      return corrupt("bad frame count");
+    content.clip_frames.push_back(frames);
+  }
+
+  // Welding.
+  content.welded_index.assign(content.vertex_count, UINT32_MAX);
+  std::vector<uint32_t> leader(content.vertex_count);
+  std::iota(leader.begin(), leader.end(), 0u);
+  for (const std::vector<uint32_t>& group : identical_position_groups(base)) {
+    if (group.size() < 2) continue;
+    if (decoder.decode_bit(models.group_welded)) {
+      for (uint32_t v : group) leader[v] = group[0];
+      continue;
+    }
+    for (size_t j = 1; j < group.size(); ++j) {
+      const uint32_t target = models.group_member.decode(decoder);
+      if (target > j) return corrupt("bad welding");
+      leader[group[j]] = target == j ? group[j] : leader[group[target]];
+    }
+    if (decoder.failed()) return decoder.finish();
+  }
+  for (uint32_t v = 0; v < content.vertex_count; ++v)
+    content.welded_index[v] = leader[v] == v ? content.welded_count++ : content.welded_index[leader[v]];
+
+  content.cluster_count = models.count.decode(decoder);
+  if (decoder.failed() || content.cluster_count == 0 || content.cluster_count > format::kMaxClusters ||
+      content.cluster_count > content.welded_count)
+    return corrupt("bad cluster count");
+  BitTreeModel label_model(bits_for(content.cluster_count));
+  content.labels.resize(content.welded_count);
+  for (uint32_t& label : content.labels) {
+    label = label_model.decode(decoder);
+    if (label >= content.cluster_count) return corrupt("cluster label out of range");
+  }
+
+  content.linear_step = bits_float(decoder.decode_direct_bits(32));
+  content.translation_step = bits_float(decoder.decode_direct_bits(32));
+  if (!(content.linear_step > 0) || !(content.translation_step > 0) || !std::isfinite(content.linear_step) ||
+      !std::isfinite(content.translation_step))
+    return corrupt("bad motion quantizer steps");
+  const size_t clusters = content.cluster_count, frames = content.frame_count();
+  if (uint64_t(frames) * clusters > format::kMaxVertexFrames) return corrupt("too many clusters for its frames");
+  content.motion.resize(frames * clusters * 12);
+  for (size_t f = 0; f < frames; ++f) {
+    for (size_t k = 0; k < clusters; ++k)
+      for (size_t c = 0; c < 12; ++c) {
+        const size_t index = (f * clusters + k) * 12 + c;
+        const int64_t value = int64_t(f == 0 ? 0 : content.motion[index - clusters * 12]) +
+                              models.motion[c].decode(decoder);
+        if (value < INT32_MIN || value > INT32_MAX) return corrupt("motion coefficient out of range");
+        content.motion[index] = int32_t(value);
+      }
+    if (decoder.failed()) return decoder.finish();
+  }
+
+  content.weight_bits = int(models.count.decode(decoder));
+  if (content.weight_bits < 1 || content.weight_bits > format::kMaxWeightBits) return corrupt("bad weight precision");
+  BitTreeModel cluster_model(bits_for(content.cluster_count));
+  content.weight_offset.assign(1, 0);
+  for (size_t w = 0; w < content.welded_count; ++w) {
+    const uint32_t extra = models.extra_count.decode(decoder);
+    if (extra > format::kMaxExtraWeights) return corrupt("too many weights");
+    for (uint32_t i = 0; i < extra; ++i) {
+      const uint32_t cluster = cluster_model.decode(decoder);
+      if (cluster >= content.cluster_count) return corrupt("weight cluster out of range");
+      content.weight_cluster.push_back(cluster);
+      content.weight_value.push_back(models.weight.decode(decoder));
+    }
+    content.weight_offset.push_back(uint32_t(content.weight_cluster.size()));
+    if (decoder.failed()) return decoder.finish();
+  }
+
+  const bool lossless = content.flags & format::kFlagLossless;
+  for (int axis = 0; axis < 3; ++axis) {
+    content.residual_step[axis] = bits_float(decoder.decode_direct_bits(32));
+    if (!lossless && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
+      return corrupt("bad residual quantizer step");
+  }
+  const size_t row = size_t(content.welded_count) * 3;
+  content.residuals.resize(frames * row);
+  for (size_t index = 0; index < content.residuals.size(); ++index) {
+    const int64_t previous = index >= row ? content.residuals[index - row] : 0;
+    SignedModel& model = models.residual[size_t(residual_context(index % 3, previous))];
+    int64_t value = model.decode(decoder);
+    if (value == kEscape) {
+      if (!lossless) return corrupt("escape in a lossy stream");
+      const uint64_t high = decoder.decode_direct_bits(32), low = decoder.decode_direct_bits(32);
+      value = int64_t((high << 32) | low);
+    }
+    content.residuals[index] = value;
+    if ((index & 0xffff) == 0 && decoder.failed()) return decoder.finish();
+  }
+  return decoder.finish();
+}
+
+}  // namespace segmorph

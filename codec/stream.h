@@ -1,0 +1,64 @@
+// The content of a segmorph animation stream, and its entropy coding (range_coder.h). What the symbols mean
+// and how the decoder turns them into frames is reconstruction.h; the byte layout is spec/'s appendix.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "status.h"
+
+namespace segmorph {
+
+struct StreamContent {
+  uint8_t flags = 0;                   // format::kFlag*
+  uint32_t vertex_count = 0;           // V, must equal the base mesh's
+  // Welding: vertices with bit-identical base positions form groups (the decoder finds them itself); a group
+  // is usually one welded vertex, else its partition is coded. welded_index: V, numbered in order of first
+  // vertex; welded_count: W.
+  std::vector<uint32_t> welded_index;
+  uint32_t welded_count = 0;
+  std::vector<uint32_t> clip_frames;   // frames per clip; F = their sum
+  uint32_t cluster_count = 0;          // K
+  std::vector<uint32_t> labels;        // W: cluster of each welded vertex
+  // Motion: per frame and cluster, 12 integers: the 9 entries of L − I in units of linear_step, then the 3 of
+  // t − c (c the cluster's base centroid) in units of translation_step. F × K × 12.
+  float linear_step = 0, translation_step = 0;
+  std::vector<int32_t> motion;
+  // Weights: per welded vertex, extra clusters blended in with weights value · 2^-weight_bits; the own
+  // cluster takes the rest of 1.
+  int weight_bits = 0;
+  std::vector<uint32_t> weight_offset;  // W + 1
+  std::vector<uint32_t> weight_cluster;
+  std::vector<int32_t> weight_value;
+  // Residuals: F × W × 3 symbols. Lossy: quantizer indices with steps residual_step[axis]. Lossless:
+  // differences of order-preserving float bit patterns.
+  float residual_step[3] = {0, 0, 0};
+  std::vector<int64_t> residuals;
+
+  size_t frame_count() const;
+};
+
+// Byte offsets of the parts of an encoded stream, for reports.
+struct StreamSizes {
+  size_t motion = 0;     // header, welding, labels, motion, weights
+  size_t residuals = 0;
+};
+
+// Appends the encoded stream to `out`. base: V × 3, as for read_stream (the welding groups come from it).
+void write_stream(const StreamContent& content, const std::vector<float>& base, std::vector<uint8_t>& out,
+                  StreamSizes* sizes = nullptr);
+
+// Parses a stream whose decoder-side facts are `base` (V × 3 floats): V must match, welding groups come from
+// it. Every count is checked against format limits and the data before anything is sized by it.
+Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& base, StreamContent& content);
+
+// Groups of vertices with bit-identical base positions, in order of their first vertex; each group lists its
+// vertices ascending. Singletons are included.
+std::vector<std::vector<uint32_t>> identical_position_groups(const std::vector<float>& base);
+
+// Order-preserving map between floats and integers (for lossless residuals): a < b as floats (with −0 < +0)
+// exactly when ordered(a) < ordered(b).
+int64_t ordered_bits(float x);
+float from_ordered_bits(int64_t value);
+
+}  // namespace segmorph
