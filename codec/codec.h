@@ -27,6 +27,7 @@ struct CodecSettings {
   bool motion_refinement = true;     // beyond the paper: boundary vertices follow the best-fitting motion
   bool blend_weights = true;         // Eq. 3; off: each vertex follows its own cluster only
   bool temporal_residuals = true;    // beyond the paper: residuals predicted from the previous frame's
+  bool spatial_residuals = true;     // beyond the paper: ... and from already decoded neighbours'
   // Bytes of the output outside this stream (the base mesh, the container) that a bpvf target includes.
   size_t outside_bytes = 0;
 };
@@ -50,9 +51,10 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
                         const CodecSettings& settings, std::vector<uint8_t>& stream, EncodeReport* report = nullptr,
                         std::vector<FrameSequence>* reconstruction = nullptr);
 
-// Decodes a stream against the base positions (V × 3). The clips come back with their positions (frame
-// times are the container's business and are left empty). Never reads outside [data, data + size).
+// Decodes a stream against the base mesh: positions (V × 3) and triangles (T × 3 indices into V, as the
+// encoder's clips had them). The clips come back with their positions (frame times are the container's
+// business and are left empty). Never reads outside [data, data + size).
 Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
-                        std::vector<FrameSequence>& clips);
+                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips);
 
 }  // namespace segmorph

@@ -7,12 +7,15 @@
 namespace segmorph {
 
 Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
-                        std::vector<FrameSequence>& clips) {
+                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
   if (base.size() % 3 != 0) return Status(StatusCode::invalid_argument, "base positions must be V × 3");
+  for (uint32_t index : triangles)
+    if (index >= base.size() / 3) return Status(StatusCode::invalid_argument, "a triangle names a missing vertex");
   StreamContent content;
   SEGMORPH_RETURN_IF_ERROR(read_stream(data, size, base, content));
   const std::vector<float> welded = welded_base(base, content);
-  const std::vector<float> frames = reconstruct_welded(content, predicted_frames(content, welded));
+  const std::vector<float> frames =
+      reconstruct_welded(content, residual_traversal(content, triangles), predicted_frames(content, welded));
   for (float x : frames)
     if (!std::isfinite(x)) return Status(StatusCode::bad_data, "animation stream decodes to NaN or infinite positions");
 

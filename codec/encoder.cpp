@@ -119,7 +119,8 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
 
   StreamContent content;
   content.flags = (settings.mode == RateMode::lossless ? format::kFlagLossless : 0) |
-                  (settings.temporal_residuals ? format::kFlagTemporalResiduals : 0);
+                  (settings.temporal_residuals ? format::kFlagTemporalResiduals : 0) |
+                  (settings.spatial_residuals ? format::kFlagSpatialResiduals : 0);
   content.vertex_count = uint32_t(vertex_count);
   content.welded_index = topology.welded_index;
   content.welded_count = uint32_t(topology.welded_count());
@@ -138,6 +139,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
       for (uint32_t v : topology.representative)
         for (int c = 0; c < 3; ++c) trajectories.positions.push_back(clip.frame(f)[v * 3 + size_t(c)]);
   const std::vector<float> base_welded = welded_base(base, content);
+  const ResidualTraversal traversal = residual_traversal(content, clips[0].triangles);
   std::vector<uint32_t> multiplicity(welded, 0);
   for (uint32_t w : topology.welded_index) ++multiplicity[w];
 
@@ -190,8 +192,8 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   SubbandCurve curves[3];
   // Measures more candidate steps of one subband and adds them to its curve.
   auto extend = [&](int axis, const std::vector<double>& steps) {
-    const SubbandCurve more = measure_subband(predictions, trajectories.positions, content.clip_frames, multiplicity,
-                                              axis, settings.temporal_residuals, steps);
+    const SubbandCurve more = measure_subband(content, traversal, predictions, trajectories.positions, multiplicity,
+                                              axis, steps);
     SubbandCurve& curve = curves[axis];
     curve.step.insert(curve.step.end(), more.step.begin(), more.step.end());
     curve.distortion.insert(curve.distortion.end(), more.distortion.begin(), more.distortion.end());
@@ -261,8 +263,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
                  : steps_for_bits(curves, residual_budget);
     };
     for (int axis = 0; axis < 3; ++axis)
-      curves[axis] = measure_subband(predictions, trajectories.positions, content.clip_frames, multiplicity, axis,
-                                     settings.temporal_residuals, coarse);
+      curves[axis] = measure_subband(content, traversal, predictions, trajectories.positions, multiplicity, axis, coarse);
     choice = choose();
     refine(choice, choose);
     for (int axis = 0; axis < 3; ++axis) content.residual_step[axis] = float(curves[axis].step[choice.index[axis]]);
@@ -277,7 +278,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   auto encode_residuals = [&] {
     content.residuals.assign(predictions.size(), 0);
     residual_loop(
-        content, predictions,
+        content, traversal, predictions,
         [&](size_t index, double p, double r) -> int64_t {
           const float x = trajectories.positions[index];
           if (lossless) return content.residuals[index] = ordered_bits(x) - ordered_bits(float(p + r));

@@ -1,5 +1,7 @@
 #include "rate_control.h"
 
+#include "stream_format.h"
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -48,36 +50,50 @@ std::vector<double> candidate_steps(double around) {
   return steps;
 }
 
-SubbandCurve measure_subband(const std::vector<double>& predictions, const std::vector<float>& targets,
-                             const std::vector<uint32_t>& clip_frames, const std::vector<uint32_t>& multiplicity,
-                             int axis, bool temporal, const std::vector<double>& steps) {
+SubbandCurve measure_subband(const StreamContent& content, const ResidualTraversal& traversal,
+                             const std::vector<double>& predictions, const std::vector<float>& targets,
+                             const std::vector<uint32_t>& multiplicity, int axis, const std::vector<double>& steps) {
   SubbandCurve curve;
   const size_t welded = multiplicity.size();
-  std::vector<double> previous(welded);
-  std::vector<int64_t> previous_symbol(welded);
+  const bool temporal = content.flags & format::kFlagTemporalResiduals;
+  const bool spatial = content.flags & format::kFlagSpatialResiduals;
+  std::vector<double> previous(welded), current(welded);
+  std::vector<int64_t> previous_symbol(welded), current_symbol(welded);
   for (double step : steps) {
-    const float step_float = float(step);  // the stream stores steps as float
-    const double q = step_float;
+    const double q = double(float(step));  // the stream stores steps as float
     double distortion = 0;
     EntropyCounter entropy;
     size_t frame = 0;
-    for (uint32_t frames : clip_frames) {
+    for (uint32_t frames : content.clip_frames) {
       std::fill(previous.begin(), previous.end(), 0.0);
       std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
-      for (uint32_t f = 0; f < frames; ++f, ++frame)
-        for (size_t w = 0; w < welded; ++w) {
-          const size_t index = (frame * welded + w) * 3 + size_t(axis);
+      for (uint32_t f = 0; f < frames; ++f, ++frame) {
+        for (uint32_t v : traversal.order) {
+          const size_t index = (frame * welded + v) * 3 + size_t(axis);
           const double p = predictions[index];
-          const double r = temporal ? previous[w] : 0.0;
+          double r = temporal ? previous[v] : 0.0;
+          if (spatial) {
+            const uint32_t begin = traversal.earlier_offset[v], end = traversal.earlier_offset[v + 1];
+            if (end > begin) {
+              double sum = 0;
+              for (uint32_t j = begin; j < end; ++j) {
+                const uint32_t u = traversal.earlier[j];
+                sum += temporal ? current[u] - previous[u] : current[u];
+              }
+              r += sum / double(end - begin);
+            }
+          }
           const int64_t k = std::llround((double(targets[index]) - p - r) / q);
-          const double residual = r + double(k) * q;
-          const double error = double(float(p + residual)) - double(targets[index]);
-          distortion += multiplicity[w] * error * error;
-          const int64_t magnitude = previous_symbol[w] < 0 ? -previous_symbol[w] : previous_symbol[w];
+          current[v] = r + double(k) * q;
+          const double error = double(float(p + current[v])) - double(targets[index]);
+          distortion += multiplicity[v] * error * error;
+          const int64_t magnitude = previous_symbol[v] < 0 ? -previous_symbol[v] : previous_symbol[v];
           entropy.add(int(std::min<int64_t>(magnitude, 2)), k);
-          previous[w] = residual;
-          previous_symbol[w] = k;
+          current_symbol[v] = k;
         }
+        previous.swap(current);
+        previous_symbol.swap(current_symbol);
+      }
     }
     curve.step.push_back(q);
     curve.distortion.push_back(distortion);

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "reconstruction.h"
+
 namespace segmorph {
 
 // Distortion and rate of one subband at each candidate step: D in squared model units summed over all its
@@ -18,12 +20,12 @@ struct SubbandCurve {
 // Candidate steps: `around` × 2^(j/4) for j in [−24, 24].
 std::vector<double> candidate_steps(double around);
 
-// Closed-loop D(q) and R(q) of one axis for every step (same arithmetic as the decoder's residual loop).
-// predictions, targets: F × W × 3; clip_frames: frames per clip; multiplicity: W (original vertices per
-// welded vertex); temporal: residuals predicted from the previous frame's.
-SubbandCurve measure_subband(const std::vector<double>& predictions, const std::vector<float>& targets,
-                             const std::vector<uint32_t>& clip_frames, const std::vector<uint32_t>& multiplicity,
-                             int axis, bool temporal, const std::vector<double>& steps);
+// Closed-loop D(q) and R(q) of one axis for every step: the decoder's residual loop (reconstruction.h) for
+// that axis, with the content's flags and clips. predictions, targets: F × W × 3; multiplicity: W (original
+// vertices per welded vertex).
+SubbandCurve measure_subband(const StreamContent& content, const ResidualTraversal& traversal,
+                             const std::vector<double>& predictions, const std::vector<float>& targets,
+                             const std::vector<uint32_t>& multiplicity, int axis, const std::vector<double>& steps);
 
 struct StepChoice {
   size_t index[3] = {0, 0, 0};  // into each curve

@@ -1,6 +1,48 @@
 #include "reconstruction.h"
 
+#include <queue>
+
+#include "topology.h"
+
 namespace segmorph {
+
+ResidualTraversal residual_traversal(const StreamContent& content, const std::vector<uint32_t>& triangles) {
+  WeldedTopology topology;
+  topology.representative.resize(content.welded_count);  // only its size is used: W
+  for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
+    const uint32_t a = content.welded_index[triangles[t]], b = content.welded_index[triangles[t + 1]],
+                   c = content.welded_index[triangles[t + 2]];
+    if (a != b && b != c && a != c) topology.triangles.insert(topology.triangles.end(), {a, b, c});
+  }
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  ResidualTraversal traversal;
+  std::vector<uint32_t> position(content.welded_count, UINT32_MAX);
+  for (uint32_t start = 0; start < content.welded_count; ++start) {
+    if (position[start] != UINT32_MAX) continue;
+    std::queue<uint32_t> queue;
+    queue.push(start);
+    position[start] = uint32_t(traversal.order.size());
+    traversal.order.push_back(start);
+    while (!queue.empty()) {
+      const uint32_t u = queue.front();
+      queue.pop();
+      for (uint32_t i = adjacency.offset[u]; i < adjacency.offset[u + 1]; ++i) {
+        const uint32_t w = adjacency.neighbour[i];
+        if (position[w] != UINT32_MAX) continue;
+        position[w] = uint32_t(traversal.order.size());
+        traversal.order.push_back(w);
+        queue.push(w);
+      }
+    }
+  }
+  traversal.earlier_offset.assign(1, 0);
+  for (uint32_t v = 0; v < content.welded_count; ++v) {
+    for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i)
+      if (position[adjacency.neighbour[i]] < position[v]) traversal.earlier.push_back(adjacency.neighbour[i]);
+    traversal.earlier_offset.push_back(uint32_t(traversal.earlier.size()));
+  }
+  return traversal;
+}
 
 std::vector<float> welded_base(const std::vector<float>& base, const StreamContent& content) {
   std::vector<float> welded(size_t(content.welded_count) * 3);
@@ -64,10 +106,11 @@ std::vector<double> predicted_frames(const StreamContent& content, const std::ve
   return predictions;
 }
 
-std::vector<float> reconstruct_welded(const StreamContent& content, const std::vector<double>& predictions) {
+std::vector<float> reconstruct_welded(const StreamContent& content, const ResidualTraversal& traversal,
+                                      const std::vector<double>& predictions) {
   std::vector<float> frames(predictions.size());
   residual_loop(
-      content, predictions, [&](size_t index, double, double) { return content.residuals[index]; },
+      content, traversal, predictions, [&](size_t index, double, double) { return content.residuals[index]; },
       [&](size_t index, float x) { frames[index] = x; });
   return frames;
 }

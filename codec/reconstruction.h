@@ -22,18 +22,33 @@ ClusterWeights dequantized_weights(const StreamContent& content);
 // Predicted positions of every frame: F × W × 3 doubles.
 std::vector<double> predicted_frames(const StreamContent& content, const std::vector<float>& welded);
 
+// The order in which a frame's welded vertices are reconstructed, and for each vertex its neighbours that come
+// before it in that order (the ones a spatial prediction may use). The order is breadth-first from the
+// lowest-numbered vertex of each connected piece, neighbours in ascending index; the mesh is the base mesh's
+// triangles (V indices) through the welding, triangles with two equal welded corners left out.
+struct ResidualTraversal {
+  std::vector<uint32_t> order;            // W
+  std::vector<uint32_t> earlier_offset;   // W + 1, indexed by welded vertex
+  std::vector<uint32_t> earlier;          // neighbours earlier in the order
+};
+ResidualTraversal residual_traversal(const StreamContent& content, const std::vector<uint32_t>& triangles);
+
 // The residual loop shared by encoder and decoder. For each clip, frame, welded vertex and axis in that
-// order, with p the prediction and r the previous frame's reconstructed residual of the same vertex and
-// axis (0 at a clip's first frame, or always when temporal residuals are off):
+// order (vertices in traversal order), with p the prediction and r the predicted residual: the previous
+// frame's reconstructed residual of the same vertex and axis when temporal residuals are on (0 at a clip's
+// first frame), plus, when spatial residuals are on, the mean over the vertex's earlier neighbours of their
+// reconstructed residual in this frame minus (temporal) their previous one:
 //   lossy:    x = float(p + (r + k · step[axis]))          and the new r is r + k · step[axis]
 //   lossless: x = from_ordered_bits(ordered_bits(float(p + r)) + k)   and the new r is x − p
 // `symbol(index, p, r)` returns k for the symbol at `index` (the encoder computes it from its target, the
 // decoder reads it); `output(index, x)` receives each reconstructed coordinate.
 template <typename Symbol, typename Output>
-void residual_loop(const StreamContent& content, const std::vector<double>& predictions, Symbol symbol, Output output);
+void residual_loop(const StreamContent& content, const ResidualTraversal& traversal,
+                   const std::vector<double>& predictions, Symbol symbol, Output output);
 
 // Frames (welded, F × W × 3 floats) of a complete content.
-std::vector<float> reconstruct_welded(const StreamContent& content, const std::vector<double>& predictions);
+std::vector<float> reconstruct_welded(const StreamContent& content, const ResidualTraversal& traversal,
+                                      const std::vector<double>& predictions);
 
 }  // namespace segmorph
 

@@ -6,31 +6,47 @@
 namespace segmorph {
 
 template <typename Symbol, typename Output>
-void residual_loop(const StreamContent& content, const std::vector<double>& predictions, Symbol symbol, Output output) {
+void residual_loop(const StreamContent& content, const ResidualTraversal& traversal,
+                   const std::vector<double>& predictions, Symbol symbol, Output output) {
   const size_t welded = content.welded_count;
   const bool lossless = content.flags & format::kFlagLossless;
   const bool temporal = content.flags & format::kFlagTemporalResiduals;
-  std::vector<double> previous(welded * 3, 0.0);
+  const bool spatial = content.flags & format::kFlagSpatialResiduals;
+  std::vector<double> previous(welded * 3, 0.0), current(welded * 3, 0.0);
   size_t frame = 0;
   for (uint32_t frames : content.clip_frames) {
     std::fill(previous.begin(), previous.end(), 0.0);
-    for (uint32_t f = 0; f < frames; ++f, ++frame)
-      for (size_t i = 0; i < welded * 3; ++i) {
-        const size_t index = frame * welded * 3 + i;
-        const double p = predictions[index];
-        const double r = temporal ? previous[i] : 0.0;
-        const int64_t k = symbol(index, p, r);
-        float x;
-        if (lossless) {
-          x = from_ordered_bits(ordered_bits(float(p + r)) + k);
-          previous[i] = double(x) - p;
-        } else {
-          const double residual = r + double(k) * double(content.residual_step[i % 3]);
-          x = float(p + residual);
-          previous[i] = residual;
+    for (uint32_t f = 0; f < frames; ++f, ++frame) {
+      for (uint32_t v : traversal.order)
+        for (size_t axis = 0; axis < 3; ++axis) {
+          const size_t i = size_t(v) * 3 + axis;
+          const size_t index = frame * welded * 3 + i;
+          const double p = predictions[index];
+          double r = temporal ? previous[i] : 0.0;
+          if (spatial) {
+            const uint32_t begin = traversal.earlier_offset[v], end = traversal.earlier_offset[v + 1];
+            if (end > begin) {
+              double sum = 0;
+              for (uint32_t j = begin; j < end; ++j) {
+                const size_t u = size_t(traversal.earlier[j]) * 3 + axis;
+                sum += temporal ? current[u] - previous[u] : current[u];
+              }
+              r += sum / double(end - begin);
+            }
+          }
+          const int64_t k = symbol(index, p, r);
+          float x;
+          if (lossless) {
+            x = from_ordered_bits(ordered_bits(float(p + r)) + k);
+            current[i] = double(x) - p;
+          } else {
+            current[i] = r + double(k) * double(content.residual_step[axis]);
+            x = float(p + current[i]);
+          }
+          output(index, x);
         }
-        output(index, x);
-      }
+      previous.swap(current);
+    }
   }
 }
 

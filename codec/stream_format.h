@@ -14,7 +14,8 @@ constexpr size_t kHeaderBytes = 10;  // magic, version, flags, body length (u32,
 // Flags byte.
 constexpr uint8_t kFlagLossless = 1 << 0;            // residuals code float bit patterns exactly
 constexpr uint8_t kFlagTemporalResiduals = 1 << 1;   // residuals are predicted from the previous frame's
-constexpr uint8_t kKnownFlags = kFlagLossless | kFlagTemporalResiduals;
+constexpr uint8_t kFlagSpatialResiduals = 1 << 2;    // residuals are predicted from already decoded neighbours
+constexpr uint8_t kKnownFlags = kFlagLossless | kFlagTemporalResiduals | kFlagSpatialResiduals;
 
 // Limits a decoder enforces before allocating (a stream claiming more is refused as bad data).
 constexpr uint32_t kMaxClips = 4096;

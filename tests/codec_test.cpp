@@ -77,7 +77,7 @@ TEST(Codec, DecodingGivesTheEncodersReconstructionExactly) {
   settings.target = 0.5;
   const Encoded encoded = encode(clips, base, settings);
   std::vector<FrameSequence> decoded;
-  ASSERT_TRUE(decode_animation(encoded.stream.data(), encoded.stream.size(), base, decoded).ok());
+  ASSERT_TRUE(decode_animation(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles, decoded).ok());
   ASSERT_EQ(decoded.size(), 1u);
   EXPECT_EQ(decoded[0].positions, encoded.reconstruction[0].positions);
   EXPECT_LE(kg(clips, decoded), 0.5);
@@ -97,7 +97,7 @@ TEST(Codec, LosslessRestoresTheFloatsBitForBit) {
   settings.mode = RateMode::lossless;
   const Encoded encoded = encode(clips, base, settings);
   std::vector<FrameSequence> decoded;
-  ASSERT_TRUE(decode_animation(encoded.stream.data(), encoded.stream.size(), base, decoded).ok());
+  ASSERT_TRUE(decode_animation(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles, decoded).ok());
   ASSERT_EQ(decoded.size(), 2u);
   for (size_t c = 0; c < 2; ++c) {
     ASSERT_EQ(decoded[c].positions.size(), clips[c].positions.size());
@@ -140,7 +140,7 @@ TEST(Codec, SeveralClipsShareOneSegmentation) {
   const std::vector<float> base = quantized_base(clips[0]);
   const Encoded encoded = encode(clips, base, CodecSettings());
   std::vector<FrameSequence> decoded;
-  ASSERT_TRUE(decode_animation(encoded.stream.data(), encoded.stream.size(), base, decoded).ok());
+  ASSERT_TRUE(decode_animation(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles, decoded).ok());
   ASSERT_EQ(decoded.size(), 3u);
   for (size_t c = 0; c < 3; ++c) {
     EXPECT_EQ(decoded[c].frame_count, clips[c].frame_count);
@@ -155,15 +155,15 @@ TEST(CodecHostile, PrefixesTrailingBytesAndWrongBasesAreRefused) {
   const Encoded encoded = encode(clips, base, CodecSettings());
   std::vector<FrameSequence> decoded;
   for (size_t size = 0; size < encoded.stream.size(); ++size)
-    EXPECT_FALSE(decode_animation(encoded.stream.data(), size, base, decoded).ok()) << "prefix of " << size << " bytes";
+    EXPECT_FALSE(decode_animation(encoded.stream.data(), size, base, clips[0].triangles, decoded).ok()) << "prefix of " << size << " bytes";
   std::vector<uint8_t> longer = encoded.stream;
   longer.push_back(0);
-  EXPECT_FALSE(decode_animation(longer.data(), longer.size(), base, decoded).ok());
+  EXPECT_FALSE(decode_animation(longer.data(), longer.size(), base, clips[0].triangles, decoded).ok());
   const std::vector<float> smaller(base.begin(), base.end() - 3);
-  EXPECT_FALSE(decode_animation(encoded.stream.data(), encoded.stream.size(), smaller, decoded).ok());
+  EXPECT_FALSE(decode_animation(encoded.stream.data(), encoded.stream.size(), smaller, clips[0].triangles, decoded).ok());
   std::vector<uint8_t> version = encoded.stream;
   version[4] = 99;
-  EXPECT_EQ(decode_animation(version.data(), version.size(), base, decoded).code(), StatusCode::unsupported);
+  EXPECT_EQ(decode_animation(version.data(), version.size(), base, clips[0].triangles, decoded).code(), StatusCode::unsupported);
 }
 
 TEST(CodecHostile, RandomByteFlipsNeverCrash) {
@@ -176,7 +176,7 @@ TEST(CodecHostile, RandomByteFlipsNeverCrash) {
     std::vector<uint8_t> bytes = encoded.stream;
     for (int flips = 1 + int(random() % 4); flips > 0; --flips) bytes[random() % bytes.size()] ^= uint8_t(1 + random() % 255);
     std::vector<FrameSequence> decoded;
-    const Status status = decode_animation(bytes.data(), bytes.size(), base, decoded);
+    const Status status = decode_animation(bytes.data(), bytes.size(), base, clips[0].triangles, decoded);
     if (!status.ok()) {
       ++refused;
       EXPECT_EQ(status.message().find('\n'), std::string::npos);
