@@ -71,18 +71,7 @@ SubbandCurve measure_subband(const StreamContent& content, const ResidualTravers
         for (uint32_t v : traversal.order) {
           const size_t index = (frame * welded + v) * 3 + size_t(axis);
           const double p = predictions[index];
-          double r = temporal ? previous[v] : 0.0;
-          if (spatial) {
-            const uint32_t begin = traversal.earlier_offset[v], end = traversal.earlier_offset[v + 1];
-            if (end > begin) {
-              double sum = 0;
-              for (uint32_t j = begin; j < end; ++j) {
-                const uint32_t u = traversal.earlier[j];
-                sum += temporal ? current[u] - previous[u] : current[u];
-              }
-              r += sum / double(end - begin);
-            }
-          }
+          const double r = predicted_residual(traversal, v, 0, 1, current.data(), previous.data(), temporal, spatial);
           const int64_t k = std::llround((double(targets[index]) - p - r) / q);
           current[v] = r + double(k) * q;
           const double error = double(float(p + current[v])) - double(targets[index]);

@@ -33,6 +33,23 @@ struct ResidualTraversal {
 };
 ResidualTraversal residual_traversal(const StreamContent& content, const std::vector<uint32_t>& triangles);
 
+// The predicted residual of vertex v, coordinate `axis`, from the reconstructed residuals of the current frame
+// so far and of the previous frame (arrays of W × stride values; coordinate a of vertex u at u · stride + a).
+inline double predicted_residual(const ResidualTraversal& traversal, uint32_t v, size_t axis, size_t stride,
+                                 const double* current, const double* previous, bool temporal, bool spatial) {
+  double r = temporal ? previous[v * stride + axis] : 0.0;
+  const uint32_t begin = traversal.earlier_offset[v], end = traversal.earlier_offset[v + 1];
+  if (spatial && end > begin) {
+    double sum = 0;
+    for (uint32_t j = begin; j < end; ++j) {
+      const size_t u = size_t(traversal.earlier[j]) * stride + axis;
+      sum += temporal ? current[u] - previous[u] : current[u];
+    }
+    r += sum / double(end - begin);
+  }
+  return r;
+}
+
 // The residual loop shared by encoder and decoder. For each clip, frame, welded vertex and axis in that
 // order (vertices in traversal order), with p the prediction and r the predicted residual: the previous
 // frame's reconstructed residual of the same vertex and axis when temporal residuals are on (0 at a clip's

@@ -22,18 +22,7 @@ void residual_loop(const StreamContent& content, const ResidualTraversal& traver
           const size_t i = size_t(v) * 3 + axis;
           const size_t index = frame * welded * 3 + i;
           const double p = predictions[index];
-          double r = temporal ? previous[i] : 0.0;
-          if (spatial) {
-            const uint32_t begin = traversal.earlier_offset[v], end = traversal.earlier_offset[v + 1];
-            if (end > begin) {
-              double sum = 0;
-              for (uint32_t j = begin; j < end; ++j) {
-                const size_t u = size_t(traversal.earlier[j]) * 3 + axis;
-                sum += temporal ? current[u] - previous[u] : current[u];
-              }
-              r += sum / double(end - begin);
-            }
-          }
+          const double r = predicted_residual(traversal, v, axis, 3, current.data(), previous.data(), temporal, spatial);
           const int64_t k = symbol(index, p, r);
           float x;
           if (lossless) {
