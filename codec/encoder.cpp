@@ -30,6 +30,8 @@ constexpr size_t kMaxAutomaticClusters = 24;
 constexpr int kWeightBits = 8;
 // Motion quantizer steps relative to the mean residual step: translation β q̄, linear β q̄ / (RMS radius).
 constexpr double kMotionStepRatio = 0.5;
+// Other ratios tried with an error target.
+constexpr double kMotionStepRatioTrials[] = {1.0, 2.0, 4.0};
 
 Status check_input(const std::vector<FrameSequence>& clips, const std::vector<float>& base) {
   if (clips.empty()) return Status(StatusCode::invalid_argument, "no clips to encode");
@@ -226,10 +228,10 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     }
     choice_ = choose_();
   };
-  // Two passes: the motion steps follow the residual steps, which depend on the prediction.
-  for (int pass = 0; pass < 2; ++pass) {
-    start = Clock::now();
-    const double motion_step = kMotionStepRatio * mean_step;
+  // Quantized motion and weights for a motion step (translation step; the linear step is it over the RMS
+  // cluster radius), and the predictions they give.
+  auto prepare_motion = [&](double motion_step) {
+    auto begin = Clock::now();
     quantize_motion(fitted, settings.mode == RateMode::lossless ? 1e-6 : motion_step / radius,
                     settings.mode == RateMode::lossless ? 1e-6 * radius : motion_step, content);
     const AffineMotion motion = dequantized_motion(content, base_welded);
@@ -238,37 +240,76 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
                                                      adjacency.offset, adjacency.neighbour, 2, 4)
                                : own_cluster_weights(clusters);
     quantize_weights(weights, content);
-    report.ms_motion += milliseconds_since(start);
-    start = Clock::now();
+    report.ms_motion += milliseconds_since(begin);
+    begin = Clock::now();
     predictions = predicted_frames(content, base_welded);
-    report.ms_prediction += milliseconds_since(start);
-    if (settings.mode == RateMode::lossless) break;
-
-    start = Clock::now();
-    // Coarse to fine: every fourth candidate step first, then the neighbours of each subband's choice.
-    std::vector<double> coarse;
-    for (size_t j = 0; j < candidate_steps(mean_step).size(); j += 4) coarse.push_back(candidate_steps(mean_step)[j]);
-    double residual_budget = 0;
-    if (settings.mode == RateMode::bpvf) {
-      // Budget for the residuals: the target minus what the rest of the output costs.
-      content.residuals.clear();
-      std::vector<uint8_t> side;
-      write_stream(content, base, side);
+    report.ms_prediction += milliseconds_since(begin);
+  };
+  // Bytes of the stream without residuals (header, welding, labels, motion, weights).
+  auto side_bytes = [&] {
+    content.residuals.clear();
+    std::vector<uint8_t> side;
+    write_stream(content, base, side);
+    return side.size();
+  };
+  double residual_budget = 0;
+  auto choose = [&] {
+    return settings.mode == RateMode::error
+               ? steps_for_distortion(curves, std::pow(settings.target / 100.0, 2) * spread)
+               : steps_for_bits(curves, residual_budget);
+  };
+  // The residual steps for the current predictions: coarse candidates (every fourth), then refined.
+  auto residual_rate_control = [&] {
+    const auto begin = Clock::now();
+    if (settings.mode == RateMode::bpvf)
       residual_budget = std::max(0.0, settings.target * double(vertex_count) * double(frames_total) -
-                                          8.0 * double(side.size() + settings.outside_bytes));
-    }
-    auto choose = [&] {
-      return settings.mode == RateMode::error
-                 ? steps_for_distortion(curves, std::pow(settings.target / 100.0, 2) * spread)
-                 : steps_for_bits(curves, residual_budget);
-    };
+                                          8.0 * double(side_bytes() + settings.outside_bytes));
+    const std::vector<double> all = candidate_steps(mean_step);
+    std::vector<double> coarse;
+    for (size_t j = 0; j < all.size(); j += 4) coarse.push_back(all[j]);
     for (int axis = 0; axis < 3; ++axis)
       curves[axis] = measure_subband(content, traversal, predictions, trajectories.positions, multiplicity, axis, coarse);
     choice = choose();
     refine(choice, choose);
     for (int axis = 0; axis < 3; ++axis) content.residual_step[axis] = float(curves[axis].step[choice.index[axis]]);
-    mean_step = (content.residual_step[0] + content.residual_step[1] + content.residual_step[2]) / 3.0;
-    report.ms_rate_control += milliseconds_since(start);
+    report.ms_rate_control += milliseconds_since(begin);
+  };
+
+  // The motion steps trade side information against prediction quality. They are tied to the residual step:
+  // motion step = β × mean residual step. With a rate target, two passes (the second with the first's residual
+  // steps) at β = kMotionStepRatio. With an error target the residual step is known in advance; β is chosen
+  // among a few values by the estimated total size, each estimated with the residual steps of the first.
+  if (settings.mode == RateMode::lossless) {
+    prepare_motion(0);
+  } else if (settings.mode == RateMode::bpvf) {
+    for (int pass = 0; pass < 2; ++pass) {
+      prepare_motion(kMotionStepRatio * mean_step);
+      residual_rate_control();
+      mean_step = (content.residual_step[0] + content.residual_step[1] + content.residual_step[2]) / 3.0;
+    }
+  } else {
+    const double guess = mean_step;
+    prepare_motion(kMotionStepRatio * guess);
+    residual_rate_control();
+    const StepChoice first = choice;
+    double best_ratio = kMotionStepRatio, best_bytes = double(side_bytes()) + choice.bits / 8;
+    const SubbandCurve kept[3] = {curves[0], curves[1], curves[2]};
+    for (double ratio : kMotionStepRatioTrials) {
+      prepare_motion(ratio * guess);
+      const auto begin = Clock::now();
+      for (int axis = 0; axis < 3; ++axis) {
+        std::vector<double> near;
+        for (int j = -2; j <= 2; ++j) near.push_back(kept[axis].step[first.index[axis]] * std::exp2(j / 4.0));
+        curves[axis] = measure_subband(content, traversal, predictions, trajectories.positions, multiplicity, axis, near);
+      }
+      const StepChoice trial = choose();
+      report.ms_rate_control += milliseconds_since(begin);
+      const double bytes = double(side_bytes()) + trial.bits / 8;
+      if (trial.distortion <= std::pow(settings.target / 100.0, 2) * spread && bytes < best_bytes)
+        best_bytes = bytes, best_ratio = ratio;
+    }
+    prepare_motion(best_ratio * guess);
+    residual_rate_control();
   }
 
   // Residual symbols by the decoder's own loop, then the stream.
@@ -282,7 +323,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
         [&](size_t index, double p, double r) -> int64_t {
           const float x = trajectories.positions[index];
           if (lossless) return content.residuals[index] = ordered_bits(x) - ordered_bits(float(p + r));
-          return content.residuals[index] = std::llround((double(x) - p - r) / double(content.residual_step[index % 3]));
+          return content.residuals[index] = quantizer_index((double(x) - p - r) / double(content.residual_step[index % 3]));
         },
         [&](size_t index, float x) { decoded[index] = x; });
     stream.clear();

@@ -72,7 +72,7 @@ SubbandCurve measure_subband(const StreamContent& content, const ResidualTravers
           const size_t index = (frame * welded + v) * 3 + size_t(axis);
           const double p = predictions[index];
           const double r = predicted_residual(traversal, v, 0, 1, current.data(), previous.data(), temporal, spatial);
-          const int64_t k = std::llround((double(targets[index]) - p - r) / q);
+          const int64_t k = quantizer_index((double(targets[index]) - p - r) / q);
           current[v] = r + double(k) * q;
           const double error = double(float(p + current[v])) - double(targets[index]);
           distortion += multiplicity[v] * error * error;

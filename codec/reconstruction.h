@@ -33,6 +33,12 @@ struct ResidualTraversal {
 };
 ResidualTraversal residual_traversal(const StreamContent& content, const std::vector<uint32_t>& triangles);
 
+// Quantizer index of a residual: the nearest integer, halves away from zero (llround's rule, inlined: this runs
+// for every coordinate of every frame at every candidate step of the rate control).
+inline int64_t quantizer_index(double residual_over_step) {
+  return int64_t(residual_over_step + (residual_over_step >= 0 ? 0.5 : -0.5));
+}
+
 // The predicted residual of vertex v, coordinate `axis`, from the reconstructed residuals of the current frame
 // so far and of the previous frame (arrays of W × stride values; coordinate a of vertex u at u · stride + a).
 inline double predicted_residual(const ResidualTraversal& traversal, uint32_t v, size_t axis, size_t stride,
