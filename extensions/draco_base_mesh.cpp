@@ -1,0 +1,103 @@
+#include "draco_base_mesh.h"
+
+#include <draco/compression/decode.h>
+#include <draco/compression/encode.h>
+#include <draco/mesh/mesh.h>
+
+namespace segmorph {
+namespace {
+
+draco::GeometryAttribute::Type draco_type(const std::string& semantic) {
+  if (semantic == "POSITION") return draco::GeometryAttribute::POSITION;
+  if (semantic == "NORMAL") return draco::GeometryAttribute::NORMAL;
+  if (semantic.rfind("TEXCOORD_", 0) == 0) return draco::GeometryAttribute::TEX_COORD;
+  if (semantic.rfind("COLOR_", 0) == 0) return draco::GeometryAttribute::COLOR;
+  return draco::GeometryAttribute::GENERIC;
+}
+
+}  // namespace
+
+Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& settings, std::vector<uint8_t>& bytes,
+                              std::map<std::string, int>& attribute_ids) {
+  draco::Mesh draco_mesh;
+  draco_mesh.set_num_points(uint32_t(mesh.vertex_count));
+  attribute_ids.clear();
+  for (const BaseMeshAttribute& attribute : mesh.attributes) {
+    if (attribute.components < 1 || attribute.components > 4 ||
+        attribute.values.size() != mesh.vertex_count * size_t(attribute.components))
+      return Status(StatusCode::invalid_argument, "base mesh attribute " + attribute.semantic + " has the wrong size");
+    draco::GeometryAttribute geometry;
+    geometry.Init(draco_type(attribute.semantic), nullptr, int8_t(attribute.components), draco::DT_FLOAT32, false,
+                  int64_t(sizeof(float)) * attribute.components, 0);
+    const int id = draco_mesh.AddAttribute(geometry, true, uint32_t(mesh.vertex_count));
+    draco::PointAttribute* point_attribute = draco_mesh.attribute(id);
+    for (size_t v = 0; v < mesh.vertex_count; ++v)
+      point_attribute->SetAttributeValue(draco::AttributeValueIndex(uint32_t(v)),
+                                         &attribute.values[v * size_t(attribute.components)]);
+    attribute_ids[attribute.semantic] = int(point_attribute->unique_id());
+  }
+  draco_mesh.SetNumFaces(mesh.triangles.size() / 3);
+  for (size_t t = 0; t < mesh.triangles.size() / 3; ++t) {
+    draco::Mesh::Face face;
+    for (int c = 0; c < 3; ++c) {
+      if (mesh.triangles[t * 3 + size_t(c)] >= mesh.vertex_count)
+        return Status(StatusCode::invalid_argument, "base mesh triangle names a missing vertex");
+      face[c] = draco::PointIndex(mesh.triangles[t * 3 + size_t(c)]);
+    }
+    draco_mesh.SetFace(draco::FaceIndex(uint32_t(t)), face);
+  }
+
+  draco::Encoder encoder;
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, settings.position_bits);
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, settings.normal_bits);
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, settings.texcoord_bits);
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::COLOR, settings.color_bits);
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::GENERIC, settings.generic_bits);
+  encoder.SetSpeedOptions(settings.speed, settings.speed);
+  encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+  draco::EncoderBuffer buffer;
+  const draco::Status status = encoder.EncodeMeshToBuffer(draco_mesh, &buffer);
+  if (!status.ok()) return Status(StatusCode::numerical, "Draco could not encode the base mesh: " + status.error_msg_string());
+  bytes.assign(buffer.data(), buffer.data() + buffer.size());
+  return Status::Ok();
+}
+
+Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<std::string, int>& attribute_ids,
+                              BaseMesh& mesh, size_t max_vertices) {
+  draco::DecoderBuffer buffer;
+  buffer.Init(reinterpret_cast<const char*>(data), size);
+  draco::Decoder decoder;
+  auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
+  if (!decoded.ok()) return Status(StatusCode::bad_data, "Draco cannot decode the base mesh: " + decoded.status().error_msg_string());
+  const std::unique_ptr<draco::Mesh> draco_mesh = std::move(decoded).value();
+  if (draco_mesh->num_points() > max_vertices || draco_mesh->num_faces() > 4 * max_vertices)
+    return Status(StatusCode::bad_data, "the Draco base mesh is absurdly large");
+  mesh = BaseMesh();
+  mesh.vertex_count = draco_mesh->num_points();
+  for (const auto& [semantic, id] : attribute_ids) {
+    const draco::PointAttribute* attribute = draco_mesh->GetAttributeByUniqueId(uint32_t(id));
+    if (!attribute) return Status(StatusCode::bad_data, "the Draco base mesh has no attribute " + std::to_string(id) + " for " + semantic);
+    BaseMeshAttribute out;
+    out.semantic = semantic;
+    out.components = attribute->num_components();
+    if (out.components < 1 || out.components > 4) return Status(StatusCode::bad_data, "Draco attribute " + semantic + " has a bad size");
+    out.values.resize(mesh.vertex_count * size_t(out.components));
+    for (uint32_t v = 0; v < mesh.vertex_count; ++v)
+      if (!attribute->ConvertValue<float>(attribute->mapped_index(draco::PointIndex(v)), int8_t(out.components),
+                                          &out.values[size_t(v) * size_t(out.components)]))
+        return Status(StatusCode::bad_data, "Draco attribute " + semantic + " cannot be read as floats");
+    if (semantic == "POSITION") mesh.attributes.insert(mesh.attributes.begin(), std::move(out));
+    else mesh.attributes.push_back(std::move(out));
+  }
+  mesh.triangles.resize(size_t(draco_mesh->num_faces()) * 3);
+  for (uint32_t t = 0; t < draco_mesh->num_faces(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      // Draco does not check this itself: a corrupt stream can name points that do not exist.
+      const uint32_t index = draco_mesh->face(draco::FaceIndex(t))[c].value();
+      if (index >= mesh.vertex_count) return Status(StatusCode::bad_data, "the Draco base mesh has a triangle naming a missing vertex");
+      mesh.triangles[size_t(t) * 3 + size_t(c)] = index;
+    }
+  return Status::Ok();
+}
+
+}  // namespace segmorph

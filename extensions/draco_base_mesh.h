@@ -1,0 +1,46 @@
+// A primitive's base mesh (the first frame: positions, other attributes, triangles) compressed with Draco, in
+// the form KHR_draco_mesh_compression stores it. The only file that sees Draco.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "status.h"
+
+namespace segmorph {
+
+struct BaseMeshAttribute {
+  std::string semantic;       // glTF attribute name: POSITION, NORMAL, TANGENT, TEXCOORD_n, COLOR_n, _NAME
+  int components = 0;         // 1 to 4
+  std::vector<float> values;  // V × components
+};
+
+struct BaseMesh {
+  size_t vertex_count = 0;                    // V
+  std::vector<BaseMeshAttribute> attributes;  // POSITION first
+  std::vector<uint32_t> triangles;            // T × 3
+};
+
+struct DracoSettings {
+  int position_bits = 14;  // quantization bits per attribute kind (Draco's defaults but for positions)
+  int normal_bits = 10;
+  int texcoord_bits = 12;
+  int color_bits = 8;
+  int generic_bits = 12;
+  int speed = 5;           // Draco's encoding and decoding speed, 0 (best compression) to 10
+};
+
+// Encodes `mesh` into `bytes`. The vertex order is kept (Draco's sequential mesh encoding), so the animation
+// stream can follow the vertices the decoder gets back. `attribute_ids` receives, per semantic, the Draco
+// attribute id that KHR_draco_mesh_compression's "attributes" map names.
+Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& settings, std::vector<uint8_t>& bytes,
+                              std::map<std::string, int>& attribute_ids);
+
+// Decodes Draco bytes. `attribute_ids`: semantic → Draco attribute id, as in the glTF extension; every named
+// attribute must be present. Refuses a mesh whose counts exceed `max_vertices` before building arrays.
+Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<std::string, int>& attribute_ids,
+                              BaseMesh& mesh, size_t max_vertices = size_t(1) << 26);
+
+}  // namespace segmorph
