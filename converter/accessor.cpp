@@ -261,6 +261,16 @@ int AccessorWriter::add_floats(const float* data, size_t count, int type, bool b
   return int(model_.accessors.size()) - 1;
 }
 
+int AccessorWriter::add_indices(const std::vector<uint32_t>& indices) {
+  tinygltf::Accessor accessor;
+  accessor.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+  accessor.count = indices.size();
+  accessor.type = TINYGLTF_TYPE_SCALAR;
+  accessor.bufferView = add_view(indices.data(), indices.size() * sizeof(uint32_t), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+  model_.accessors.push_back(accessor);
+  return int(model_.accessors.size()) - 1;
+}
+
 int AccessorWriter::add_zeros(size_t count, int type, bool bounds) {
   tinygltf::Accessor accessor = float_accessor(count, type);
   if (bounds) {

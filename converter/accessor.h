@@ -40,9 +40,12 @@ class AccessorWriter {
   // A float accessor that is zero except for `indices` (strictly increasing element indices) whose
   // elements are `values` (indices.size() × components floats): a sparse accessor with no bufferView.
   int add_sparse_floats(size_t count, int type, const std::vector<uint32_t>& indices, const std::vector<float>& values);
+  // An unsigned-int index accessor (TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER).
+  int add_indices(const std::vector<uint32_t>& indices);
+  // A bufferView holding `bytes` (for data an extension refers to).
+  int add_view(const void* data, size_t bytes, int target);
 
  private:
-  int add_view(const void* data, size_t bytes, int target);
 
   tinygltf::Model& model_;
   int buffer_;

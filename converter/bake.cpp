@@ -131,8 +131,12 @@ Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<
     model.meshes.push_back(std::move(mesh));
     const int mesh_index = int(model.meshes.size()) - 1;
 
+    // Where the node came from, unless it already says (a decoded file keeps the original's index).
+    const tinygltf::Value& existing = model.nodes[size_t(node.node)].extras;
     tinygltf::Value::Object provenance;
     provenance["source_node"] = tinygltf::Value(node.node);
+    if (existing.IsObject() && existing.Has("segmorph") && existing.Get("segmorph").IsObject())
+      provenance = existing.Get("segmorph").Get<tinygltf::Value::Object>();
     if (skinned) {
       // Skinned vertices are in model space: the baked mesh hangs from a new root with no transform.
       tinygltf::Node baked;

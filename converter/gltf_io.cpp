@@ -1,5 +1,7 @@
 #include "gltf_io.h"
 
+#include "segmorph_extension.h"
+
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -48,8 +50,7 @@ bool write_no_image(const std::string*, const std::string*, const tinygltf::Imag
 }
 
 // Extensions that store geometry in a form this reader does not decode.
-const char* const kUnreadableExtensions[] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression",
-                                             "KHR_meshopt_compression"};
+const char* const kUnreadableExtensions[] = {"EXT_meshopt_compression", "KHR_meshopt_compression"};
 
 std::string mime_of_uri(const std::string& uri) {
   if (uri.rfind("data:", 0) == 0) {
@@ -111,6 +112,15 @@ void for_each_accessor_ref(tinygltf::Model& model, F f) {
       f(sampler.input);
       f(sampler.output);
     }
+  // The frame times SEGMORPH_animation_compression names.
+  for (tinygltf::Mesh& mesh : model.meshes)
+    for (tinygltf::Primitive& primitive : mesh.primitives) {
+      auto it = primitive.extensions.find(kExtensionName);
+      CompressedPrimitive compressed;
+      if (it == primitive.extensions.end() || !parse_compressed_primitive(it->second, compressed).ok()) continue;
+      for (CompressedClip& clip : compressed.clips) f(clip.times);
+      it->second = compressed_primitive_value(compressed);
+    }
   for (tinygltf::Node& node : model.nodes) {
     auto it = node.extensions.find(kInstancing);
     if (it == node.extensions.end() || !it->second.IsObject() || !it->second.Has("attributes")) continue;
@@ -126,6 +136,27 @@ void for_each_accessor_ref(tinygltf::Model& model, F f) {
     extension["attributes"] = tinygltf::Value(std::move(attributes));
     it->second = tinygltf::Value(std::move(extension));
   }
+}
+
+// Calls f(bufferView index&) for the bufferViews that KHR_draco_mesh_compression and
+// SEGMORPH_animation_compression name on primitives.
+template <typename F>
+void for_each_extension_view(tinygltf::Model& model, F f) {
+  for (tinygltf::Mesh& mesh : model.meshes)
+    for (tinygltf::Primitive& primitive : mesh.primitives) {
+      auto compressed_it = primitive.extensions.find(kExtensionName);
+      CompressedPrimitive compressed;
+      if (compressed_it != primitive.extensions.end() && parse_compressed_primitive(compressed_it->second, compressed).ok()) {
+        f(compressed.buffer_view);
+        compressed_it->second = compressed_primitive_value(compressed);
+      }
+      auto draco_it = primitive.extensions.find(kDracoExtensionName);
+      DracoPrimitive draco;
+      if (draco_it != primitive.extensions.end() && parse_draco_primitive(draco_it->second, draco).ok()) {
+        f(draco.buffer_view);
+        draco_it->second = draco_primitive_value(draco);
+      }
+    }
 }
 
 }  // namespace
@@ -234,7 +265,9 @@ void repack(tinygltf::Model& model) {
     }
   }
   for (const tinygltf::Image& image : model.images) views.keep(image.bufferView);
+  for_each_extension_view(model, [&](int& view) { views.keep(view); });
   views.finish();
+  for_each_extension_view(model, [&](int& view) { view = views(view); });
   for (tinygltf::Accessor& accessor : model.accessors) {
     accessor.bufferView = views(accessor.bufferView);
     if (accessor.sparse.isSparse) {

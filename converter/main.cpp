@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "bake.h"
+#include "compressed.h"
+#include "metrics.h"
 #include "gltf_io.h"
 #include "sample.h"
 #include "topology.h"
@@ -25,12 +27,24 @@ const char* const kUsage =
     "      Write OUT (.glb or .gltf) with every animated primitive baked into POSITION and NORMAL morph\n"
     "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
+    "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--json]\n"
+    "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
+    "      as a SEGMORPH_animation_compression stream. Default target: --error 0.15 (KG error in %%).\n"
+    "  decode IN -o OUT\n"
+    "      Restore standard glTF morph targets (the form bake writes) from an encoded file.\n"
+    "  verify ORIGINAL COMPRESSED [--json]\n"
+    "      Compare the animation of two files (either may be encoded, baked or original): bytes, bits per\n"
+    "      vertex per frame, KG error, RMSE and maximum error over the bounding-box diagonal.\n"
     "\n"
     "Options:\n"
     "  -o, --output FILE  output file (.glb: binary; .gltf: JSON with FILE's name .bin beside it)\n"
     "  --fps N            sample every clip on a regular grid of N frames per second; by default the\n"
     "                     union of the clip's key times, or 30 fps where keys are denser than 60 per second\n"
-    "  --json             info: print one JSON object instead of text\n"
+    "  --error E          encode: KG error target in percent (default 0.15)\n"
+    "  --bpvf R           encode: target bits per vertex per frame of the whole output\n"
+    "  --lossless         encode: restore the sampled frames bit for bit\n"
+    "  --clusters K       encode: number of motion clusters (default: automatic)\n"
+    "  --json             info, encode, verify: print one JSON object instead of text\n"
     "  -q, --quiet        no progress messages on stderr\n"
     "  -h, --help         this help\n"
     "  --version          print the version\n"
@@ -42,6 +56,8 @@ struct Options {
   std::vector<std::string> inputs;
   std::string output;
   SampleSettings sampling;
+  CodecSettings codec;
+  bool rate_given = false;
   bool json = false;
   bool quiet = false;
 };
@@ -87,6 +103,7 @@ struct SampledFile {
   tinygltf::Model model;
   Scene scene;
   std::vector<SampledNode> sampled;
+  DecodedSizes decoded;  // what an encoded file held
 };
 
 Status load_and_sample(const std::string& path, const Options& options, SampledFile& file) {
@@ -97,6 +114,7 @@ Status load_and_sample(const std::string& path, const Options& options, SampledF
   std::vector<std::string> warnings;
   SEGMORPH_RETURN_IF_ERROR(load_gltf(path, model, &warnings));
   for (const std::string& warning : warnings) progress(options, "warning: " + path + ": " + warning);
+  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(model, &file.decoded));
   SEGMORPH_RETURN_IF_ERROR(analyze_scene(model, scene));
   sampled.resize(scene.animated.size());
   for (size_t i = 0; i < scene.animated.size(); ++i) {
@@ -185,6 +203,151 @@ int run_bake(const Options& options) {
   return 0;
 }
 
+// Bytes of a glTF file and of the files its buffers and images name (a .gltf's .bin).
+size_t file_bytes(const std::string& path, const tinygltf::Model& model) {
+  auto size_of = [](const std::string& file) -> size_t {
+    std::FILE* handle = std::fopen(file.c_str(), "rb");
+    if (!handle) return 0;
+    std::fseek(handle, 0, SEEK_END);
+    const long size = std::ftell(handle);
+    std::fclose(handle);
+    return size > 0 ? size_t(size) : 0;
+  };
+  size_t total = size_of(path);
+  const size_t slash = path.find_last_of('/');
+  const std::string directory = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+  for (const tinygltf::Buffer& buffer : model.buffers)
+    if (!buffer.uri.empty() && buffer.uri.rfind("data:", 0) != 0) total += size_of(directory + buffer.uri);
+  for (const tinygltf::Image& image : model.images)
+    if (!image.uri.empty() && image.uri.rfind("data:", 0) != 0) total += size_of(directory + image.uri);
+  return total;
+}
+
+int run_encode(const Options& options) {
+  const std::string& path = options.inputs[0];
+  SampledFile file;
+  Status status = load_and_sample(path, options, file);
+  if (!status.ok()) return fail(path, status);
+  status = bake_model(file.model, file.scene, file.sampled);
+  CompressReport report;
+  if (status.ok())
+    status = compress_model(file.model, file.scene, file.sampled, options.codec, DracoSettings(), report,
+                            [&](const std::string& message) { progress(options, message); });
+  if (!status.ok()) return fail(path, status);
+  progress(options, "writing " + options.output);
+  status = save_gltf(file.model, options.output);
+  if (!status.ok()) return fail(options.output, status);
+
+  tinygltf::Model written;
+  const size_t bytes = load_gltf(options.output, written).ok() ? file_bytes(options.output, written) : 0;
+  double vertex_frames = 0, clusters = 0, e_pi = 0, e_pi_before = 0, ms[5] = {0, 0, 0, 0, 0};
+  for (const SampledNode& node : file.sampled)
+    for (const SampledPrimitive& primitive : node.primitives)
+      for (const FrameSequence& clip : primitive.clips) vertex_frames += double(clip.vertex_count * clip.frame_count);
+  for (const EncodeReport& r : report.primitives) {
+    clusters += double(r.clusters);
+    e_pi = std::max(e_pi, r.e_pi);
+    e_pi_before = std::max(e_pi_before, r.e_pi_before_refinement);
+    const double stage[5] = {r.ms_segmentation, r.ms_motion, r.ms_prediction, r.ms_rate_control, r.ms_entropy};
+    for (int i = 0; i < 5; ++i) ms[i] += stage[i];
+  }
+  const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
+  if (options.json) {
+    std::printf("{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"primitives\":%zu,\"clusters\":%.0f,"
+                "\"e_pi_before_refinement\":%.6g,\"e_pi\":%.6g,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,"
+                "\"draco_bytes\":%zu,\"animation_bytes\":%zu,\"milliseconds\":{\"segmentation\":%.1f,\"motion\":%.1f,"
+                "\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f}}\n",
+                json_string(path).c_str(), json_string(options.output).c_str(), bytes, report.primitives.size(), clusters,
+                e_pi_before, e_pi, bpvf, vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0,
+                report.draco_bytes, report.animation_bytes, ms[0], ms[1], ms[2], ms[3], ms[4]);
+  } else {
+    std::printf("%s: %zu bytes, %.3f bits per vertex per frame (animation %zu bytes, base meshes %zu bytes), "
+                "%zu primitive%s, %.0f clusters, E(Pi) %.6f (before refinement %.6f)\n",
+                options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes, report.primitives.size(),
+                report.primitives.size() == 1 ? "" : "s", clusters, e_pi, e_pi_before);
+  }
+  return 0;
+}
+
+int run_decode(const Options& options) {
+  const std::string& path = options.inputs[0];
+  tinygltf::Model model;
+  std::vector<std::string> warnings;
+  progress(options, "reading " + path);
+  Status status = load_gltf(path, model, &warnings);
+  DecodedSizes sizes;
+  if (status.ok()) status = decode_compressed_model(model, &sizes);
+  if (!status.ok()) return fail(path, status);
+  if (sizes.primitives == 0)
+    return fail(path, Status(StatusCode::nothing_to_do, "not encoded: it has no SEGMORPH_animation_compression primitive"));
+  progress(options, "writing " + options.output);
+  status = save_gltf(model, options.output);
+  if (!status.ok()) return fail(options.output, status);
+  progress(options, "decoded " + std::to_string(sizes.primitives) + " primitive" + (sizes.primitives == 1 ? "" : "s"));
+  return 0;
+}
+
+int source_node_of(const tinygltf::Node& node) {
+  if (!node.extras.IsObject() || !node.extras.Has("segmorph") || !node.extras.Get("segmorph").IsObject()) return -1;
+  const tinygltf::Value& provenance = node.extras.Get("segmorph");
+  return provenance.Has("source_node") && provenance.Get("source_node").IsNumber() ? provenance.Get("source_node").GetNumberAsInt() : -1;
+}
+
+int run_verify(const Options& options) {
+  SampledFile original, compressed;
+  Status status = load_and_sample(options.inputs[0], options, original);
+  if (!status.ok()) return fail(options.inputs[0], status);
+  status = load_and_sample(options.inputs[1], options, compressed);
+  if (!status.ok()) return fail(options.inputs[1], status);
+
+  ErrorMetrics worst;
+  double vertex_frames = 0;
+  size_t vertices = 0, frames = 0;
+  for (const SampledNode& want : original.sampled) {
+    const SampledNode* got = nullptr;
+    for (const SampledNode& candidate : compressed.sampled) {
+      const int source = source_node_of(compressed.model.nodes[size_t(candidate.node->node)]);
+      if ((source >= 0 ? source : candidate.node->node) == want.node->node) got = &candidate;
+    }
+    const std::string node_label = node_name(original.model, want.node->node);
+    if (!got) return fail(options.inputs[1], Status(StatusCode::bad_data, "has no animation for " + node_label));
+    if (got->primitives.size() != want.primitives.size() || got->node->clips.size() != want.node->clips.size())
+      return fail(options.inputs[1], Status(StatusCode::bad_data, node_label + ": primitives or clips differ"));
+    for (size_t p = 0; p < want.primitives.size(); ++p) {
+      ErrorAccumulator accumulator;
+      for (size_t c = 0; c < want.primitives[p].clips.size(); ++c) {
+        const FrameSequence& a = want.primitives[p].clips[c];
+        const FrameSequence& b = got->primitives[p].clips[c];
+        if (a.vertex_count != b.vertex_count || a.times != b.times)
+          return fail(options.inputs[1], Status(StatusCode::bad_data, node_label + ": vertices or frame times differ"));
+        accumulator.add(a, b);
+        vertex_frames += double(a.vertex_count * a.frame_count);
+        frames = std::max(frames, a.frame_count);
+      }
+      vertices += want.primitives[p].clips[0].vertex_count;
+      const ErrorMetrics metrics = accumulator.result();
+      worst.kg_percent = std::max(worst.kg_percent, metrics.kg_percent);
+      worst.rmse_over_diagonal = std::max(worst.rmse_over_diagonal, metrics.rmse_over_diagonal);
+      worst.max_error_over_diagonal = std::max(worst.max_error_over_diagonal, metrics.max_error_over_diagonal);
+    }
+  }
+  const size_t bytes = file_bytes(options.inputs[1], compressed.model);
+  const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
+  const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(compressed.decoded.animation_bytes) / vertex_frames : 0;
+  if (options.json) {
+    std::printf("{\"original\":%s,\"compressed\":%s,\"vertices\":%zu,\"frames\":%zu,\"bytes\":%zu,\"bpvf\":%.4f,"
+                "\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,\"rmse_over_diag\":%.6g,\"max_error_over_diag\":%.6g}\n",
+                json_string(options.inputs[0]).c_str(), json_string(options.inputs[1]).c_str(), vertices, frames, bytes,
+                bpvf, bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal, worst.max_error_over_diagonal);
+  } else {
+    std::printf("%s against %s: %zu vertices, %zu frames, %zu bytes, %.3f bpvf (animation %.3f), KG %.4f %%, "
+                "RMSE %.3g and max error %.3g of the diagonal\n",
+                options.inputs[1].c_str(), options.inputs[0].c_str(), vertices, frames, bytes, bpvf, bpvf_animation,
+                worst.kg_percent, worst.rmse_over_diagonal, worst.max_error_over_diagonal);
+  }
+  return 0;
+}
+
 int run(int argc, char** argv) {
   Options options;
   for (int i = 1; i < argc; ++i) {
@@ -209,6 +372,29 @@ int run(int argc, char** argv) {
       options.sampling.fps = std::strtod(text.c_str(), &end);
       if (end == text.c_str() || *end || !(options.sampling.fps > 0) || options.sampling.fps > 1000)
         return usage_error("--fps takes a number of frames per second between 0 and 1000, not '" + text + "'");
+    } else if (arg == "--error" || arg == "--bpvf") {
+      std::string text;
+      if (!value(text)) return usage_error(arg + " needs a number");
+      char* end = nullptr;
+      const double number = std::strtod(text.c_str(), &end);
+      if (end == text.c_str() || *end || !(number > 0) || number > (arg == "--error" ? 100.0 : 1000.0))
+        return usage_error(arg + " takes a positive number, not '" + text + "'");
+      if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
+      options.rate_given = true;
+      options.codec.mode = arg == "--error" ? RateMode::error : RateMode::bpvf;
+      options.codec.target = number;
+    } else if (arg == "--lossless") {
+      if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
+      options.rate_given = true;
+      options.codec.mode = RateMode::lossless;
+    } else if (arg == "--clusters") {
+      std::string text;
+      if (!value(text)) return usage_error("--clusters needs a number");
+      char* end = nullptr;
+      const long clusters = std::strtol(text.c_str(), &end, 10);
+      if (end == text.c_str() || *end || clusters < 1 || clusters > 65535)
+        return usage_error("--clusters takes a whole number from 1 to 65535, not '" + text + "'");
+      options.codec.clusters = size_t(clusters);
     } else if (arg == "--json") {
       options.json = true;
     } else if (arg == "-q" || arg == "--quiet") {
@@ -235,6 +421,16 @@ int run(int argc, char** argv) {
     if (options.output.empty()) return usage_error("bake needs -o OUT");
     if (!has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
     return run_bake(options);
+  }
+  if (options.command == "encode" || options.command == "decode") {
+    if (options.inputs.size() != 1) return usage_error(options.command + " takes one input file");
+    if (options.output.empty()) return usage_error(options.command + " needs -o OUT");
+    if (!has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
+    return options.command == "encode" ? run_encode(options) : run_decode(options);
+  }
+  if (options.command == "verify") {
+    if (options.inputs.size() != 2) return usage_error("verify takes two files: ORIGINAL COMPRESSED");
+    return run_verify(options);
   }
   return usage_error("unknown command '" + options.command + "'");
 }

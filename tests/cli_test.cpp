@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -78,6 +79,10 @@ TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(run("info " + sample("Fox/Fox.glb") + " --fps -3").exit_code, 2);
   EXPECT_EQ(run("info --bogus " + sample("Fox/Fox.glb")).exit_code, 2);
   EXPECT_EQ(run("info a.glb b.glb").exit_code, 2);
+  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --error 0.5 --bpvf 2").exit_code, 2);
+  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --error -1").exit_code, 2);
+  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --clusters 0").exit_code, 2);
+  EXPECT_EQ(run("verify " + sample("Fox/Fox.glb")).exit_code, 2);
 }
 
 TEST(Cli, BadInputsFailCleanly) {
@@ -98,10 +103,10 @@ TEST(Cli, BadInputsFailCleanly) {
   write_text(directory + "/still.gltf", R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{}]})");
   expect_clean_failure(directory + "/still.gltf", "nothing animated");
 
-  write_text(directory + "/draco.gltf",
-             R"({"asset":{"version":"2.0"},"extensionsUsed":["KHR_draco_mesh_compression"],)"
-             R"("extensionsRequired":["KHR_draco_mesh_compression"],"nodes":[{}]})");
-  expect_clean_failure(directory + "/draco.gltf", "KHR_draco_mesh_compression");
+  write_text(directory + "/meshopt.gltf",
+             R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_meshopt_compression"],)"
+             R"("extensionsRequired":["EXT_meshopt_compression"],"nodes":[{}]})");
+  expect_clean_failure(directory + "/meshopt.gltf", "EXT_meshopt_compression");
 
   // SimpleMorph with its first accessor claiming more vertices than its bufferView holds.
   std::string morph = read_text(sample("SimpleMorph/SimpleMorph.gltf"));
@@ -160,6 +165,69 @@ TEST(Cli, BakeWritesGlbAndGltfAndNothingElse) {
   std::sort(names.begin(), names.end());
   EXPECT_EQ(names, (std::vector<std::string>{"fox.glb", "morph.bin", "morph.gltf"}));
   EXPECT_NE(read_text(directory + "/morph.gltf").find("\"uri\": \"morph.bin\""), std::string::npos);
+}
+
+// One number from a JSON line printed by the tool ("key":value).
+double json_number(const std::string& json, const std::string& key) {
+  const size_t at = json.find("\"" + key + "\":");
+  return at == std::string::npos ? NAN : std::atof(json.c_str() + at + key.size() + 3);
+}
+
+TEST(Cli, EncodeDecodeAndVerify) {
+  const std::string directory = output_directory("encode");
+  const std::string input = sample("Fox/Fox.glb");
+  Result result = run("encode -q " + input + " -o " + directory + "/fox.glb --error 0.5 --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_GT(json_number(result.out, "clusters"), 0);
+  EXPECT_LE(json_number(result.out, "e_pi"), json_number(result.out, "e_pi_before_refinement"));
+  EXPECT_GT(json_number(result.out, "bpvf"), 0);
+  EXPECT_FALSE(std::isnan(json_number(result.out, "rate_control")));
+  // Three times smaller than the input at least (the input's frames as skin; the output carries the texture too).
+  EXPECT_LT(fs::file_size(directory + "/fox.glb") * 2, fs::file_size(input));
+
+  result = run("verify -q " + input + " " + directory + "/fox.glb --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const double kg = json_number(result.out, "kg_percent");
+  EXPECT_LE(kg, 0.5);
+  EXPECT_GT(kg, 0.1);
+  EXPECT_EQ(json_number(result.out, "vertices"), 1728);
+  EXPECT_GT(json_number(result.out, "bpvf_animation"), 0);
+
+  result = run("decode -q " + directory + "/fox.glb -o " + directory + "/fox-decoded.glb");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  result = run("verify -q " + input + " " + directory + "/fox-decoded.glb --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_DOUBLE_EQ(json_number(result.out, "kg_percent"), kg);  // the decoded file plays the decoder's frames
+  EXPECT_EQ(json_number(result.out, "bpvf_animation"), 0);      // standard glTF: no stream left
+
+  // Decoding a file that is not encoded says so.
+  result = run("decode -q " + input + " -o " + directory + "/not.glb");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("not encoded"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(directory + "/not.glb"));
+}
+
+TEST(Cli, CorruptedEncodedFilesFailCleanlyOrDecode) {
+  const std::string directory = output_directory("corrupt_encoded");
+  ASSERT_EQ(run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory + "/encoded.glb").exit_code, 0);
+  const std::string original = read_text(directory + "/encoded.glb");
+  std::mt19937 random(99);
+  for (int trial = 0; trial < 60; ++trial) {
+    std::string bytes = original;
+    // Damage the binary chunk (past the JSON), where the Draco and animation streams are.
+    const size_t from = bytes.size() / 3;
+    for (int c = 0; c < 1 + int(random() % 6); ++c) bytes[from + random() % (bytes.size() - from)] = char(random() % 256);
+    if (trial % 6 == 0) bytes.resize(from + random() % (bytes.size() - from));
+    write_text(directory + "/input.glb", bytes);
+    fs::remove(directory + "/out.glb");
+    const Result result = run("decode -q " + directory + "/input.glb -o " + directory + "/out.glb");
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    ASSERT_TRUE(result.exit_code == 0 || result.exit_code == 1) << result.exit_code << " " << result.err;
+    if (result.exit_code == 1) {
+      EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+      EXPECT_FALSE(fs::exists(directory + "/out.glb"));
+    }
+  }
 }
 
 TEST(Cli, InfoReportsPrimitivesAndClips) {

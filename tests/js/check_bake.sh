@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Bakes every sample and checks the outputs with the Node.js tools; run by ctest.
-#   check_bake.sh validate|three SEGMORPH WORKDIR SAMPLES_DIR [SHARED_SAMPLES_DIR]
+#   check_bake.sh validate|three|encode SEGMORPH WORKDIR SAMPLES_DIR [SHARED_SAMPLES_DIR]
 # validate: the Khronos glTF-Validator must report 0 errors on every bake output (.glb, and .gltf for one file).
 # three:    three.js playing the original and the baked file must agree to 1e-5 of the bounding-box diagonal.
+# encode:   encode (--error 0.5), check KG <= 0.5 % with verify, decode; the validator must report 0 errors on
+#           both files. The long classic sequences are left to the codec tests and benchmarks.
 set -u
 mode=$1 segmorph=$2 work=$3 samples=$4 shared=${5:-}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -39,6 +41,20 @@ for input in $files; do
         "$segmorph" bake -q "$input" -o "$work/$index-$name.gltf" && outputs="$outputs $work/$index-$name.gltf"
       fi
       node "$here/validate.mjs" $outputs || failures=$((failures + 1))
+      ;;
+    encode)
+      case "$input" in */sequences/*) continue ;; esac
+      encoded="$work/$index-$name.encoded.glb" decoded="$work/$index-$name.decoded.glb"
+      if "$segmorph" encode -q "$input" -o "$encoded" --error 0.5 >/dev/null &&
+         report=$("$segmorph" verify -q "$input" "$encoded" --json) &&
+         "$segmorph" decode -q "$encoded" -o "$decoded"; then
+        kg=$(echo "$report" | sed 's/.*"kg_percent":\([^,}]*\).*/\1/')
+        echo "$input: KG $kg %"
+        awk -v kg="$kg" 'BEGIN { exit !(kg <= 0.5) }' || { echo "FAIL $input: KG $kg % above 0.5"; failures=$((failures + 1)); }
+        node "$here/validate.mjs" "$encoded" "$decoded" || failures=$((failures + 1))
+      else
+        echo "FAIL encode/verify/decode $input"; failures=$((failures + 1))
+      fi
       ;;
     three)
       # SimpleSkin's rotation keys are not unit quaternions (off by up to 2.3e-4, which the specification does

@@ -1,0 +1,307 @@
+#include "compressed.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "accessor.h"
+#include "bake.h"
+#include "segmorph_extension.h"
+
+namespace segmorph {
+namespace {
+
+int type_of_components(int components) {
+  switch (components) {
+    case 1: return TINYGLTF_TYPE_SCALAR;
+    case 2: return TINYGLTF_TYPE_VEC2;
+    case 3: return TINYGLTF_TYPE_VEC3;
+    default: return TINYGLTF_TYPE_VEC4;
+  }
+}
+
+int source_node_of(const tinygltf::Node& node) {
+  if (!node.extras.IsObject() || !node.extras.Has("segmorph")) return -1;
+  const tinygltf::Value& provenance = node.extras.Get("segmorph");
+  return provenance.IsObject() && provenance.Has("source_node") && provenance.Get("source_node").IsNumber()
+             ? provenance.Get("source_node").GetNumberAsInt()
+             : -1;
+}
+
+// The bytes of bufferView `index`, checked against its buffer.
+Status view_bytes(const tinygltf::Model& model, int index, const std::string& what, const uint8_t** data, size_t* size) {
+  if (index < 0 || size_t(index) >= model.bufferViews.size())
+    return Status(StatusCode::bad_data, what + " names bufferView " + std::to_string(index) + ", which does not exist");
+  const tinygltf::BufferView& view = model.bufferViews[size_t(index)];
+  if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size())
+    return Status(StatusCode::bad_data, what + ": its bufferView names a missing buffer");
+  const std::vector<unsigned char>& buffer = model.buffers[size_t(view.buffer)].data;
+  if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
+    return Status(StatusCode::bad_data, what + ": its bufferView lies outside its buffer");
+  *data = buffer.data() + view.byteOffset;
+  *size = view.byteLength;
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status compress_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled,
+                      const CodecSettings& settings, const DracoSettings& draco, CompressReport& report,
+                      const std::function<void(const std::string&)>& progress) {
+  (void)scene;
+  AccessorWriter writer(model);
+  for (const SampledNode& node : sampled) {
+    const AnimatedNode& animated = *node.node;
+    int host = -1;
+    for (size_t n = 0; n < model.nodes.size(); ++n)
+      if (source_node_of(model.nodes[n]) == animated.node && model.nodes[n].mesh >= 0) host = int(n);
+    if (host < 0) return Status(StatusCode::invalid_argument, "compress_model needs a baked model");
+    tinygltf::Mesh& mesh = model.meshes[size_t(model.nodes[size_t(host)].mesh)];
+
+    // The clips of this node: each animation's weights channel on the host goes, its frame times stay.
+    CompressedPrimitive compressed;
+    for (size_t a = 0; a < model.animations.size(); ++a) {
+      tinygltf::Animation& animation = model.animations[a];
+      for (size_t c = 0; c < animation.channels.size(); ++c) {
+        const tinygltf::AnimationChannel channel = animation.channels[c];
+        if (channel.target_node != host || channel.target_path != "weights") continue;
+        const tinygltf::AnimationSampler& sampler = animation.samplers[size_t(channel.sampler)];
+        compressed.clips.push_back({int(a), sampler.input, sampler.interpolation == "STEP"});
+        animation.channels.erase(animation.channels.begin() + long(c));
+        if (animation.channels.empty()) {
+          // A placeholder keeps the animation valid: the node's own translation, held over the clip.
+          const tinygltf::Node& target = model.nodes[size_t(host)];
+          const size_t frames = model.accessors[size_t(sampler.input)].count;
+          std::vector<float> translation;
+          for (size_t f = 0; f < frames; ++f)
+            for (int k = 0; k < 3; ++k)
+              translation.push_back(target.translation.size() == 3 ? float(target.translation[size_t(k)]) : 0.0f);
+          tinygltf::AnimationSampler hold;
+          hold.input = sampler.input;
+          hold.interpolation = "STEP";
+          hold.output = writer.add_floats(translation.data(), frames, TINYGLTF_TYPE_VEC3, false, 0);
+          animation.samplers.push_back(hold);
+          tinygltf::AnimationChannel placeholder;
+          placeholder.sampler = int(animation.samplers.size()) - 1;
+          placeholder.target_node = host;
+          placeholder.target_path = "translation";
+          placeholder.extensions[kExtensionName] = placeholder_value();
+          animation.channels.push_back(placeholder);
+        }
+        break;
+      }
+    }
+    if (compressed.clips.empty()) continue;  // a single frame: nothing to animate
+
+    for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+      tinygltf::Primitive& primitive = mesh.primitives[p];
+      const SampledPrimitive& frames = node.primitives[p];
+      const std::string what = "mesh " + std::to_string(model.nodes[size_t(host)].mesh) + " primitive " + std::to_string(p);
+      if (frames.clips[0].triangles.empty())
+        return Status(StatusCode::unsupported, what + ": only triangle primitives can be encoded");
+      progress("encoding " + what + " (" + std::to_string(frames.clips[0].vertex_count) + " vertices)");
+
+      // The base mesh: every attribute of the baked primitive (its first frame), and the triangles.
+      BaseMesh base;
+      base.vertex_count = frames.clips[0].vertex_count;
+      base.triangles = frames.clips[0].triangles;
+      for (const auto& [semantic, accessor] : primitive.attributes) {
+        BaseMeshAttribute attribute;
+        attribute.semantic = semantic;
+        SEGMORPH_RETURN_IF_ERROR(read_floats(model, accessor, what + " " + semantic, attribute.values, &attribute.components));
+        if (semantic == "POSITION") base.attributes.insert(base.attributes.begin(), std::move(attribute));
+        else base.attributes.push_back(std::move(attribute));
+      }
+      DracoPrimitive draco_primitive;
+      std::vector<uint8_t> draco_bytes;
+      SEGMORPH_RETURN_IF_ERROR(encode_draco_base_mesh(base, draco, draco_bytes, draco_primitive.attributes));
+      BaseMesh decoded;
+      SEGMORPH_RETURN_IF_ERROR(decode_draco_base_mesh(draco_bytes.data(), draco_bytes.size(), draco_primitive.attributes, decoded));
+      if (decoded.vertex_count != base.vertex_count)
+        return Status(StatusCode::numerical, what + ": Draco changed the vertex count");
+
+      // The animation, against the base positions the decoder will have.
+      CodecSettings primitive_settings = settings;
+      primitive_settings.outside_bytes += draco_bytes.size();
+      std::vector<uint8_t> stream;
+      EncodeReport encode_report;
+      SEGMORPH_RETURN_IF_ERROR(encode_animation(frames.clips, decoded.attributes[0].values, primitive_settings, stream, &encode_report));
+      report.primitives.push_back(encode_report);
+      report.draco_bytes += draco_bytes.size();
+      report.animation_bytes += stream.size();
+
+      // The primitive: attribute accessors without data (Draco holds it), the two extensions.
+      tinygltf::Primitive out;
+      out.material = primitive.material;
+      out.mode = TINYGLTF_MODE_TRIANGLES;
+      out.extras = primitive.extras;
+      out.extensions = primitive.extensions;
+      for (const BaseMeshAttribute& attribute : decoded.attributes) {
+        const int type = type_of_components(attribute.components);
+        const int accessor = attribute.semantic == "POSITION"
+                                 ? writer.add_floats(attribute.values.data(), decoded.vertex_count, type, true, 0)
+                                 : writer.add_zeros(decoded.vertex_count, type, false);
+        model.accessors[size_t(accessor)].bufferView = -1;  // the data is Draco's; bounds stay for POSITION
+        out.attributes[attribute.semantic] = accessor;
+      }
+      // No indices accessor: the triangles are Draco's (KHR_draco_mesh_compression makes it optional), and
+      // tinygltf 2.7 refuses to load an indices accessor without a bufferView.
+      draco_primitive.buffer_view = writer.add_view(draco_bytes.data(), draco_bytes.size(), 0);
+      out.extensions[kDracoExtensionName] = draco_primitive_value(draco_primitive);
+      CompressedPrimitive with_stream = compressed;
+      with_stream.buffer_view = writer.add_view(stream.data(), stream.size(), 0);
+      out.extensions[kExtensionName] = compressed_primitive_value(with_stream);
+      primitive = std::move(out);
+    }
+    if (mesh.extras.IsObject() && mesh.extras.Has("targetNames")) {
+      tinygltf::Value::Object extras = mesh.extras.Get<tinygltf::Value::Object>();
+      extras.erase("targetNames");
+      mesh.extras = extras.empty() ? tinygltf::Value() : tinygltf::Value(std::move(extras));
+    }
+  }
+  declare_extension(model, kDracoExtensionName, true);
+  declare_extension(model, kExtensionName, false);
+  return Status::Ok();
+}
+
+Status decode_draco_primitives(tinygltf::Model& model) {
+  AccessorWriter writer(model);
+  for (size_t m = 0; m < model.meshes.size(); ++m)
+    for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
+      tinygltf::Primitive& primitive = model.meshes[m].primitives[p];
+      auto it = primitive.extensions.find(kDracoExtensionName);
+      if (it == primitive.extensions.end()) continue;
+      const std::string what = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
+      DracoPrimitive draco;
+      SEGMORPH_RETURN_IF_ERROR(parse_draco_primitive(it->second, draco));
+      const uint8_t* data = nullptr;
+      size_t size = 0;
+      SEGMORPH_RETURN_IF_ERROR(view_bytes(model, draco.buffer_view, what + " " + kDracoExtensionName, &data, &size));
+      BaseMesh decoded;
+      const Status status = decode_draco_base_mesh(data, size, draco.attributes, decoded);
+      if (!status.ok()) return Status(status.code(), what + ": " + status.message());
+      for (const BaseMeshAttribute& attribute : decoded.attributes) {
+        auto accessor = primitive.attributes.find(attribute.semantic);
+        if (accessor == primitive.attributes.end() || accessor->second < 0 ||
+            size_t(accessor->second) >= model.accessors.size() ||
+            model.accessors[size_t(accessor->second)].count != decoded.vertex_count)
+          return Status(StatusCode::bad_data, what + ": Draco's " + attribute.semantic + " disagrees with its accessor");
+        accessor->second = writer.add_floats(attribute.values.data(), decoded.vertex_count,
+                                             type_of_components(attribute.components), attribute.semantic == "POSITION",
+                                             TINYGLTF_TARGET_ARRAY_BUFFER);
+      }
+      if (primitive.indices >= 0 && (size_t(primitive.indices) >= model.accessors.size() ||
+                                     model.accessors[size_t(primitive.indices)].count != decoded.triangles.size()))
+        return Status(StatusCode::bad_data, what + ": Draco's triangles disagree with the indices accessor");
+      primitive.indices = writer.add_indices(decoded.triangles);
+      primitive.mode = TINYGLTF_MODE_TRIANGLES;
+      primitive.extensions.erase(it);
+    }
+  undeclare_extension(model, kDracoExtensionName);
+  return Status::Ok();
+}
+
+Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
+  SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(model));
+  if (!declares_extension(model, kExtensionName)) return Status::Ok();
+  DecodedSizes found;
+
+  Scene scene;
+  for (size_t a = 0; a < model.animations.size(); ++a) {
+    scene.clips.emplace_back();
+    SEGMORPH_RETURN_IF_ERROR(load_clip(model, int(a), scene.clips.back()));
+  }
+  // One animated node per compressed mesh.
+  std::vector<AnimatedNode>& animated = scene.animated;
+  std::vector<std::vector<CompressedPrimitive>> streams;
+  for (size_t m = 0; m < model.meshes.size(); ++m) {
+    std::vector<CompressedPrimitive> primitives;
+    for (const tinygltf::Primitive& primitive : model.meshes[m].primitives) {
+      auto it = primitive.extensions.find(kExtensionName);
+      if (it == primitive.extensions.end()) continue;
+      primitives.emplace_back();
+      SEGMORPH_RETURN_IF_ERROR(parse_compressed_primitive(it->second, primitives.back()));
+    }
+    if (primitives.empty()) continue;
+    const std::string what = "mesh " + std::to_string(m);
+    if (primitives.size() != model.meshes[m].primitives.size())
+      return Status(StatusCode::bad_data, what + ": some primitives are compressed and some are not");
+    std::vector<int> users;
+    for (size_t n = 0; n < model.nodes.size(); ++n)
+      if (model.nodes[n].mesh == int(m)) users.push_back(int(n));
+    if (users.size() != 1) return Status(StatusCode::bad_data, what + ": a compressed mesh must be used by exactly one node");
+    AnimatedNode node;
+    node.node = users[0];
+    node.mesh = int(m);
+    node.weights_animated = true;
+    for (const CompressedClip& clip : primitives[0].clips) {
+      if (size_t(clip.animation) >= model.animations.size())
+        return Status(StatusCode::bad_data, what + ": a clip names an animation that does not exist");
+      node.clips.push_back(clip.animation);
+    }
+    for (const CompressedPrimitive& other : primitives)
+      if (other.clips.size() != primitives[0].clips.size())
+        return Status(StatusCode::bad_data, what + ": its primitives disagree on the clips");
+    animated.push_back(node);
+    streams.push_back(std::move(primitives));
+  }
+
+  std::vector<SampledNode> sampled(animated.size());
+  for (size_t i = 0; i < animated.size(); ++i) {
+    SampledNode& node = sampled[i];
+    node.node = &animated[i];
+    tinygltf::Mesh& mesh = model.meshes[size_t(animated[i].mesh)];
+    for (const CompressedClip& clip : streams[i][0].clips) node.clip_is_step.push_back(clip.step);
+    for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+      tinygltf::Primitive& primitive = mesh.primitives[p];
+      const std::string what = "mesh " + std::to_string(animated[i].mesh) + " primitive " + std::to_string(p);
+      SampledPrimitive out;
+      out.primitive = int(p);
+      int components = 0;
+      auto position = primitive.attributes.find("POSITION");
+      if (position == primitive.attributes.end()) return Status(StatusCode::bad_data, what + " has no POSITION");
+      SEGMORPH_RETURN_IF_ERROR(read_floats(model, position->second, what + " POSITION", out.rest_positions, &components));
+      if (components != 3) return Status(StatusCode::bad_data, what + ": POSITION must be VEC3");
+      auto normal = primitive.attributes.find("NORMAL");
+      if (normal != primitive.attributes.end())
+        SEGMORPH_RETURN_IF_ERROR(read_floats(model, normal->second, what + " NORMAL", out.rest_normals));
+      auto tangent = primitive.attributes.find("TANGENT");
+      if (tangent != primitive.attributes.end())
+        SEGMORPH_RETURN_IF_ERROR(read_floats(model, tangent->second, what + " TANGENT", out.rest_tangents));
+      std::vector<uint32_t> triangles;
+      if (primitive.indices < 0) return Status(StatusCode::bad_data, what + ": a compressed primitive needs indices");
+      SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", triangles));
+      for (uint32_t index : triangles)
+        if (index >= out.rest_positions.size() / 3) return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
+
+      const uint8_t* data = nullptr;
+      size_t size = 0;
+      SEGMORPH_RETURN_IF_ERROR(view_bytes(model, streams[i][p].buffer_view, what + " " + kExtensionName, &data, &size));
+      found.animation_bytes += size;
+      ++found.primitives;
+      const Status status = decode_animation(data, size, out.rest_positions, triangles, out.clips);
+      if (!status.ok()) return Status(status.code(), what + ": " + status.message());
+      if (out.clips.size() != streams[i][p].clips.size())
+        return Status(StatusCode::bad_data, what + ": the stream's clip count disagrees with the extension's");
+      for (size_t c = 0; c < out.clips.size(); ++c) {
+        FrameSequence& clip = out.clips[c];
+        SEGMORPH_RETURN_IF_ERROR(read_floats(model, streams[i][p].clips[c].times, what + " clip times", clip.times));
+        if (clip.times.size() != clip.frame_count)
+          return Status(StatusCode::bad_data, what + ": a clip's times disagree with its frame count");
+        for (size_t f = 1; f < clip.times.size(); ++f)
+          if (!(clip.times[f] > clip.times[f - 1])) return Status(StatusCode::bad_data, what + ": clip times must increase");
+        clip.triangles = triangles;
+      }
+      node.primitives.push_back(std::move(out));
+      primitive.extensions.erase(kExtensionName);
+    }
+  }
+  for (tinygltf::Animation& animation : model.animations)
+    animation.channels.erase(std::remove_if(animation.channels.begin(), animation.channels.end(), is_placeholder_channel),
+                             animation.channels.end());
+  SEGMORPH_RETURN_IF_ERROR(bake_model(model, scene, sampled));
+  undeclare_extension(model, kExtensionName);
+  if (sizes) *sizes = found;
+  return Status::Ok();
+}
+
+}  // namespace segmorph

@@ -1,0 +1,40 @@
+// Files with SEGMORPH_animation_compression: writing them (encode) and reading them back into standard glTF
+// (decode). encode = bake, then each baked primitive's morph targets become a Draco base mesh and an animation
+// stream; decode = the reverse, through the same writer as bake.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <tiny_gltf.h>
+
+#include "codec.h"
+#include "draco_base_mesh.h"
+#include "sample.h"
+#include "status.h"
+
+namespace segmorph {
+
+struct CompressReport {
+  std::vector<EncodeReport> primitives;  // one per encoded primitive
+  size_t draco_bytes = 0, animation_bytes = 0;
+};
+
+// `model` has just been baked (bake_model) from `scene` and `sampled`. Replaces each baked primitive's morph
+// targets by a Draco base mesh and an animation stream encoded with `settings`.
+Status compress_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled,
+                      const CodecSettings& settings, const DracoSettings& draco, CompressReport& report,
+                      const std::function<void(const std::string&)>& progress);
+
+// Sizes of what decoding found.
+struct DecodedSizes {
+  size_t animation_bytes = 0;  // SEGMORPH streams
+  size_t primitives = 0;
+};
+
+// Replaces KHR_draco_mesh_compression primitives by plain accessors, then decodes SEGMORPH_animation_compression
+// primitives into the form bake writes. A model with neither is left as it is.
+Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes = nullptr);
+
+}  // namespace segmorph

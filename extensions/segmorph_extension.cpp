@@ -1,0 +1,112 @@
+#include "segmorph_extension.h"
+
+#include <algorithm>
+
+namespace segmorph {
+namespace {
+
+Status missing(const std::string& object, const std::string& member) {
+  return Status(StatusCode::bad_data, object + ": \"" + member + "\" is missing or not of the right type");
+}
+
+bool get_index(const tinygltf::Value& value, const std::string& key, int& out) {
+  if (!value.IsObject() || !value.Has(key) || !value.Get(key).IsNumber()) return false;
+  const double number = value.Get(key).GetNumberAsDouble();
+  if (!(number >= 0) || number > 2147483647.0 || number != double(int(number))) return false;
+  out = int(number);
+  return true;
+}
+
+}  // namespace
+
+Status parse_compressed_primitive(const tinygltf::Value& value, CompressedPrimitive& out) {
+  const std::string object = kExtensionName;
+  out = CompressedPrimitive();
+  if (!get_index(value, "bufferView", out.buffer_view)) return missing(object, "bufferView");
+  if (!value.Has("clips") || !value.Get("clips").IsArray() || value.Get("clips").ArrayLen() == 0)
+    return missing(object, "clips");
+  const tinygltf::Value& clips = value.Get("clips");
+  for (size_t i = 0; i < clips.ArrayLen(); ++i) {
+    const tinygltf::Value& clip = clips.Get(int(i));
+    CompressedClip parsed;
+    if (!get_index(clip, "animation", parsed.animation)) return missing(object + " clip", "animation");
+    if (!get_index(clip, "times", parsed.times)) return missing(object + " clip", "times");
+    if (clip.Has("interpolation")) {
+      if (!clip.Get("interpolation").IsString()) return missing(object + " clip", "interpolation");
+      const std::string interpolation = clip.Get("interpolation").Get<std::string>();
+      if (interpolation != "LINEAR" && interpolation != "STEP")
+        return Status(StatusCode::bad_data, object + " clip: unknown interpolation " + interpolation);
+      parsed.step = interpolation == "STEP";
+    }
+    out.clips.push_back(parsed);
+  }
+  return Status::Ok();
+}
+
+Status parse_draco_primitive(const tinygltf::Value& value, DracoPrimitive& out) {
+  const std::string object = kDracoExtensionName;
+  out = DracoPrimitive();
+  if (!get_index(value, "bufferView", out.buffer_view)) return missing(object, "bufferView");
+  if (!value.Has("attributes") || !value.Get("attributes").IsObject()) return missing(object, "attributes");
+  const tinygltf::Value& attributes = value.Get("attributes");
+  for (const std::string& key : attributes.Keys()) {
+    int id = -1;
+    if (!get_index(attributes, key, id)) return missing(object + " attributes", key);
+    out.attributes[key] = id;
+  }
+  return Status::Ok();
+}
+
+bool is_placeholder_channel(const tinygltf::AnimationChannel& channel) {
+  const auto it = channel.extensions.find(kExtensionName);
+  return it != channel.extensions.end() && it->second.IsObject() && it->second.Has("placeholder") &&
+         it->second.Get("placeholder").IsBool() && it->second.Get("placeholder").Get<bool>();
+}
+
+tinygltf::Value compressed_primitive_value(const CompressedPrimitive& primitive) {
+  tinygltf::Value::Array clips;
+  for (const CompressedClip& clip : primitive.clips) {
+    tinygltf::Value::Object object;
+    object["animation"] = tinygltf::Value(clip.animation);
+    object["times"] = tinygltf::Value(clip.times);
+    object["interpolation"] = tinygltf::Value(std::string(clip.step ? "STEP" : "LINEAR"));
+    clips.emplace_back(std::move(object));
+  }
+  tinygltf::Value::Object object;
+  object["bufferView"] = tinygltf::Value(primitive.buffer_view);
+  object["clips"] = tinygltf::Value(std::move(clips));
+  return tinygltf::Value(std::move(object));
+}
+
+tinygltf::Value draco_primitive_value(const DracoPrimitive& primitive) {
+  tinygltf::Value::Object attributes;
+  for (const auto& [semantic, id] : primitive.attributes) attributes[semantic] = tinygltf::Value(id);
+  tinygltf::Value::Object object;
+  object["bufferView"] = tinygltf::Value(primitive.buffer_view);
+  object["attributes"] = tinygltf::Value(std::move(attributes));
+  return tinygltf::Value(std::move(object));
+}
+
+tinygltf::Value placeholder_value() {
+  tinygltf::Value::Object object;
+  object["placeholder"] = tinygltf::Value(true);
+  return tinygltf::Value(std::move(object));
+}
+
+void declare_extension(tinygltf::Model& model, const std::string& name, bool required) {
+  if (!declares_extension(model, name)) model.extensionsUsed.push_back(name);
+  if (required && std::find(model.extensionsRequired.begin(), model.extensionsRequired.end(), name) ==
+                      model.extensionsRequired.end())
+    model.extensionsRequired.push_back(name);
+}
+
+void undeclare_extension(tinygltf::Model& model, const std::string& name) {
+  for (std::vector<std::string>* list : {&model.extensionsUsed, &model.extensionsRequired})
+    list->erase(std::remove(list->begin(), list->end(), name), list->end());
+}
+
+bool declares_extension(const tinygltf::Model& model, const std::string& name) {
+  return std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), name) != model.extensionsUsed.end();
+}
+
+}  // namespace segmorph

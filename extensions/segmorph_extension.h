@@ -1,0 +1,57 @@
+// The JSON objects of SEGMORPH_animation_compression (and the part of KHR_draco_mesh_compression segmorph
+// reads), as plain structs, read from and written to tinygltf values. spec/ has the normative text.
+//
+// On a mesh primitive whose first frame is stored as usual (segmorph writes it with KHR_draco_mesh_compression):
+//   "SEGMORPH_animation_compression": {
+//       "bufferView": 12,                       the animation stream
+//       "clips": [ { "animation": 0,            the animation the clip's frames belong to
+//                    "times": 31,               accessor: the frame times (float, one per frame)
+//                    "interpolation": "LINEAR" } ] }   or "STEP"
+// On an animation channel that exists only so that its animation is not empty:
+//   "SEGMORPH_animation_compression": { "placeholder": true }
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <tiny_gltf.h>
+
+#include "status.h"
+
+namespace segmorph {
+
+constexpr const char* kExtensionName = "SEGMORPH_animation_compression";
+constexpr const char* kDracoExtensionName = "KHR_draco_mesh_compression";
+
+struct CompressedClip {
+  int animation = -1;
+  int times = -1;
+  bool step = false;  // interpolation STEP (else LINEAR)
+};
+
+struct CompressedPrimitive {
+  int buffer_view = -1;
+  std::vector<CompressedClip> clips;
+};
+
+struct DracoPrimitive {
+  int buffer_view = -1;
+  std::map<std::string, int> attributes;  // semantic → Draco attribute id
+};
+
+// Parse the extension objects; bad_data with a one-line message when a member is missing or of the wrong type.
+Status parse_compressed_primitive(const tinygltf::Value& value, CompressedPrimitive& out);
+Status parse_draco_primitive(const tinygltf::Value& value, DracoPrimitive& out);
+bool is_placeholder_channel(const tinygltf::AnimationChannel& channel);
+
+tinygltf::Value compressed_primitive_value(const CompressedPrimitive& primitive);
+tinygltf::Value draco_primitive_value(const DracoPrimitive& primitive);
+tinygltf::Value placeholder_value();
+
+// Adds `name` to extensionsUsed (and extensionsRequired when `required`), once; or removes it from both.
+void declare_extension(tinygltf::Model& model, const std::string& name, bool required);
+void undeclare_extension(tinygltf::Model& model, const std::string& name);
+bool declares_extension(const tinygltf::Model& model, const std::string& name);
+
+}  // namespace segmorph
