@@ -322,7 +322,7 @@ int run_verify(const Options& options) {
           return fail(options.inputs[1], Status(StatusCode::bad_data, node_label + ": vertices or frame times differ"));
         accumulator.add(a, b);
         vertex_frames += double(a.vertex_count * a.frame_count);
-        frames = std::max(frames, a.frame_count);
+        if (vertices == 0) frames += a.frame_count;  // frames of every clip, counted on the first primitive
       }
       vertices += want.primitives[p].clips[0].vertex_count;
       const ErrorMetrics metrics = accumulator.result();
