@@ -116,15 +116,31 @@ Status compress_model(tinygltf::Model& model, const Scene& scene, const std::vec
       SEGMORPH_RETURN_IF_ERROR(encode_draco_base_mesh(base, draco, draco_bytes, draco_primitive.attributes));
       BaseMesh decoded;
       SEGMORPH_RETURN_IF_ERROR(decode_draco_base_mesh(draco_bytes.data(), draco_bytes.size(), draco_primitive.attributes, decoded));
-      if (decoded.vertex_count != base.vertex_count)
-        return Status(StatusCode::numerical, what + ": Draco changed the vertex count");
+      // The frames in the order of the vertices the decoder gets back (Draco's edgebreaker reorders them, and may
+      // merge duplicates; each decoded vertex follows the original it came from).
+      std::vector<uint32_t> source;
+      SEGMORPH_RETURN_IF_ERROR(match_decoded_vertices(base, decoded, draco, source));
+      std::vector<FrameSequence> reordered(frames.clips.size());
+      for (size_t c = 0; c < frames.clips.size(); ++c) {
+        const FrameSequence& clip = frames.clips[c];
+        FrameSequence& out = reordered[c];
+        out.vertex_count = decoded.vertex_count;
+        out.frame_count = clip.frame_count;
+        out.times = clip.times;
+        out.triangles = decoded.triangles;
+        out.positions.resize(clip.frame_count * decoded.vertex_count * 3);
+        for (size_t f = 0; f < clip.frame_count; ++f)
+          for (size_t v = 0; v < decoded.vertex_count; ++v)
+            for (int k = 0; k < 3; ++k)
+              out.positions[(f * decoded.vertex_count + v) * 3 + size_t(k)] = clip.frame(f)[size_t(source[v]) * 3 + size_t(k)];
+      }
 
       // The animation, against the base positions the decoder will have.
       CodecSettings primitive_settings = settings;
       primitive_settings.outside_bytes += draco_bytes.size();
       std::vector<uint8_t> stream;
       EncodeReport encode_report;
-      SEGMORPH_RETURN_IF_ERROR(encode_animation(frames.clips, decoded.attributes[0].values, primitive_settings, stream, &encode_report));
+      SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, primitive_settings, stream, &encode_report));
       report.primitives.push_back(encode_report);
       report.draco_bytes += draco_bytes.size();
       report.animation_bytes += stream.size();

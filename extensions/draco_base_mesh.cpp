@@ -4,6 +4,10 @@
 #include <draco/compression/encode.h>
 #include <draco/mesh/mesh.h>
 
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
 namespace segmorph {
 namespace {
 
@@ -54,7 +58,7 @@ Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& setting
   encoder.SetAttributeQuantization(draco::GeometryAttribute::COLOR, settings.color_bits);
   encoder.SetAttributeQuantization(draco::GeometryAttribute::GENERIC, settings.generic_bits);
   encoder.SetSpeedOptions(settings.speed, settings.speed);
-  encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+  encoder.SetEncodingMethod(settings.keep_order ? draco::MESH_SEQUENTIAL_ENCODING : draco::MESH_EDGEBREAKER_ENCODING);
   draco::EncoderBuffer buffer;
   const draco::Status status = encoder.EncodeMeshToBuffer(draco_mesh, &buffer);
   if (!status.ok()) return Status(StatusCode::numerical, "Draco could not encode the base mesh: " + status.error_msg_string());
@@ -97,6 +101,70 @@ Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<s
       if (index >= mesh.vertex_count) return Status(StatusCode::bad_data, "the Draco base mesh has a triangle naming a missing vertex");
       mesh.triangles[size_t(t) * 3 + size_t(c)] = index;
     }
+  return Status::Ok();
+}
+
+Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings,
+                              std::vector<uint32_t>& source) {
+  const std::vector<float>& positions = original.attributes[0].values;
+  const std::vector<float>& decoded_positions = decoded.attributes[0].values;
+  double extent = 0;
+  for (int c = 0; c < 3; ++c) {
+    double low = INFINITY, high = -INFINITY;
+    for (size_t v = 0; v < original.vertex_count; ++v) {
+      low = std::min(low, double(positions[v * 3 + size_t(c)]));
+      high = std::max(high, double(positions[v * 3 + size_t(c)]));
+    }
+    if (original.vertex_count) extent = std::max(extent, high - low);
+  }
+  // Draco's positions are within half a step per axis of the originals; a step is the search radius.
+  const double step = std::max(extent / double((1 << settings.position_bits) - 1), 1e-30);
+  auto cell = [&](const float* p, int c) { return int64_t(std::floor(double(p[c]) / step)); };
+  auto key = [](int64_t x, int64_t y, int64_t z) {
+    return uint64_t(x * 73856093) ^ uint64_t(y * 19349663) ^ uint64_t(z * 83492791);
+  };
+  std::unordered_multimap<uint64_t, uint32_t> grid;
+  grid.reserve(original.vertex_count);
+  for (uint32_t v = 0; v < original.vertex_count; ++v)
+    grid.emplace(key(cell(&positions[size_t(v) * 3], 0), cell(&positions[size_t(v) * 3], 1), cell(&positions[size_t(v) * 3], 2)), v);
+
+  // Other attributes, by semantic, to tell apart vertices that share a position (seams).
+  std::vector<std::pair<const BaseMeshAttribute*, const BaseMeshAttribute*>> others;
+  for (size_t a = 1; a < decoded.attributes.size(); ++a)
+    for (size_t b = 1; b < original.attributes.size(); ++b)
+      if (original.attributes[b].semantic == decoded.attributes[a].semantic &&
+          original.attributes[b].components == decoded.attributes[a].components)
+        others.push_back({&original.attributes[b], &decoded.attributes[a]});
+
+  std::vector<bool> claimed(original.vertex_count, false);
+  source.assign(decoded.vertex_count, UINT32_MAX);
+  for (uint32_t p = 0; p < decoded.vertex_count; ++p) {
+    const float* q = &decoded_positions[size_t(p) * 3];
+    double best_cost = INFINITY;
+    uint32_t best = UINT32_MAX;
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy)
+        for (int64_t dz = -1; dz <= 1; ++dz) {
+          const auto range = grid.equal_range(key(cell(q, 0) + dx, cell(q, 1) + dy, cell(q, 2) + dz));
+          for (auto it = range.first; it != range.second; ++it) {
+            const uint32_t v = it->second;
+            double distance = 0;
+            for (int c = 0; c < 3; ++c) distance += std::pow(double(q[c]) - positions[size_t(v) * 3 + size_t(c)], 2);
+            if (distance > step * step) continue;
+            double cost = distance / (step * step);
+            for (const auto& [from, to] : others)
+              for (int c = 0; c < from->components; ++c)
+                cost += std::pow(double(to->values[size_t(p) * size_t(to->components) + size_t(c)]) -
+                                     from->values[size_t(v) * size_t(from->components) + size_t(c)], 2);
+            if (claimed[v]) cost += 1e6;  // prefer vertices no decoded vertex came from yet
+            if (cost < best_cost || (cost == best_cost && v < best)) best_cost = cost, best = v;
+          }
+        }
+    if (best == UINT32_MAX)
+      return Status(StatusCode::numerical, "a vertex Draco decoded matches no vertex of the base mesh");
+    source[p] = best;
+    claimed[best] = true;
+  }
   return Status::Ok();
 }
 

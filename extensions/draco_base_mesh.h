@@ -30,10 +30,12 @@ struct DracoSettings {
   int color_bits = 8;
   int generic_bits = 12;
   int speed = 5;           // Draco's encoding and decoding speed, 0 (best compression) to 10
+  // Draco's sequential encoding keeps the vertex order but compresses several times worse than edgebreaker,
+  // which reorders (and may merge) vertices; match_decoded_vertices maps them back.
+  bool keep_order = false;
 };
 
-// Encodes `mesh` into `bytes`. The vertex order is kept (Draco's sequential mesh encoding), so the animation
-// stream can follow the vertices the decoder gets back. `attribute_ids` receives, per semantic, the Draco
+// Encodes `mesh` into `bytes` (edgebreaker, or sequential when settings.keep_order). `attribute_ids` receives, per semantic, the Draco
 // attribute id that KHR_draco_mesh_compression's "attributes" map names.
 Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& settings, std::vector<uint8_t>& bytes,
                               std::map<std::string, int>& attribute_ids);
@@ -42,5 +44,11 @@ Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& setting
 // attribute must be present. Refuses a mesh whose counts exceed `max_vertices` before building arrays.
 Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<std::string, int>& attribute_ids,
                               BaseMesh& mesh, size_t max_vertices = size_t(1) << 26);
+
+// For each vertex Draco decoded, the vertex of `original` it came from: the one within a quantization step of
+// its position whose other attributes are closest (vertices no one else claims first, so that duplicates map
+// one to one where Draco kept them apart). Fails when a decoded vertex has no original within the step.
+Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings,
+                              std::vector<uint32_t>& source);
 
 }  // namespace segmorph

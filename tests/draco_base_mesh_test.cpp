@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -27,11 +29,13 @@ BaseMesh sphere_mesh() {
   return mesh;
 }
 
-TEST(DracoBaseMesh, RoundTripKeepsVertexOrderWithinQuantization) {
+TEST(DracoBaseMesh, SequentialRoundTripKeepsVertexOrderWithinQuantization) {
   const BaseMesh mesh = sphere_mesh();
   std::vector<uint8_t> bytes;
   std::map<std::string, int> ids;
-  ASSERT_TRUE(encode_draco_base_mesh(mesh, DracoSettings(), bytes, ids).ok());
+  DracoSettings settings;
+  settings.keep_order = true;
+  ASSERT_TRUE(encode_draco_base_mesh(mesh, settings, bytes, ids).ok());
   EXPECT_EQ(ids.size(), 3u);
   BaseMesh decoded;
   ASSERT_TRUE(decode_draco_base_mesh(bytes.data(), bytes.size(), ids, decoded).ok());
@@ -53,6 +57,46 @@ TEST(DracoBaseMesh, RoundTripKeepsVertexOrderWithinQuantization) {
   // Under half the raw data (642 × 8 floats and 1280 × 3 indices of 4 bytes). Sequential encoding, which keeps
   // the vertex order, compresses far less than Draco's edgebreaker would.
   EXPECT_LT(bytes.size(), (642u * 8 + 1280u * 3) * 4 / 2);
+}
+
+TEST(DracoBaseMesh, EdgebreakerVerticesMatchBackToTheirOriginals) {
+  const BaseMesh mesh = sphere_mesh();
+  std::vector<uint8_t> bytes, sequential;
+  std::map<std::string, int> ids;
+  ASSERT_TRUE(encode_draco_base_mesh(mesh, DracoSettings(), bytes, ids).ok());
+  DracoSettings keep;
+  keep.keep_order = true;
+  ASSERT_TRUE(encode_draco_base_mesh(mesh, keep, sequential, ids).ok());
+  EXPECT_LT(bytes.size() * 2, sequential.size()) << "edgebreaker should compress far better";
+  BaseMesh decoded;
+  ASSERT_TRUE(decode_draco_base_mesh(bytes.data(), bytes.size(), ids, decoded).ok());
+  ASSERT_EQ(decoded.vertex_count, mesh.vertex_count);  // no duplicates to merge on this sphere
+  std::vector<uint32_t> source;
+  ASSERT_TRUE(match_decoded_vertices(mesh, decoded, DracoSettings(), source).ok());
+  // A one-to-one map, each decoded vertex within a quantization step of its original...
+  std::vector<bool> seen(mesh.vertex_count, false);
+  size_t moved = 0;
+  for (uint32_t p = 0; p < decoded.vertex_count; ++p) {
+    ASSERT_FALSE(seen[source[p]]);
+    seen[source[p]] = true;
+    moved += source[p] != p;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(decoded.attributes[0].values[p * 3 + size_t(c)], mesh.attributes[0].values[source[p] * 3 + size_t(c)], 4.0 / 16383);
+  }
+  EXPECT_GT(moved, 0u) << "edgebreaker kept the order: this test no longer tests the matching";
+  // ...under which the decoded triangles are the original ones (as sets of corners, rotation aside).
+  std::vector<std::array<uint32_t, 3>> original, mapped;
+  for (size_t t = 0; t < mesh.triangles.size(); t += 3) {
+    std::array<uint32_t, 3> a = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
+    std::array<uint32_t, 3> b = {source[decoded.triangles[t]], source[decoded.triangles[t + 1]], source[decoded.triangles[t + 2]]};
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    original.push_back(a);
+    mapped.push_back(b);
+  }
+  std::sort(original.begin(), original.end());
+  std::sort(mapped.begin(), mapped.end());
+  EXPECT_EQ(original, mapped);
 }
 
 TEST(DracoBaseMesh, DecodingTwiceGivesTheSameFloats) {
