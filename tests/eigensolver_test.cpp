@@ -10,14 +10,12 @@
 #include "laplacian.h"
 #include "topology.h"
 
+#include "test_meshes.h"
+
 namespace segmorph {
 namespace {
 
-struct Mesh {
-  std::vector<double> positions;    // W × 3
-  std::vector<uint32_t> triangles;  // T × 3
-  size_t vertex_count() const { return positions.size() / 3; }
-};
+using testing::Mesh;
 
 // The icosahedron subdivided `level` times (10·4^level + 2 vertices), projected onto the sphere of
 // `radius` around `center`.

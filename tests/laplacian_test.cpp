@@ -7,14 +7,12 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "test_meshes.h"
+
 namespace segmorph {
 namespace {
 
-struct Mesh {
-  std::vector<double> positions;  // W × 3
-  std::vector<uint32_t> triangles;  // T × 3
-  size_t vertex_count() const { return positions.size() / 3; }
-};
+using testing::Mesh;
 
 // An nx × ny grid over [0, 1]², each vertex moved by up to `jitter` cells in x and y, each quad split
 // along a random diagonal, z = height(x, y): irregular, with obtuse triangles (negative cotangent weights).

@@ -4,12 +4,20 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <vector>
 
 #include "frame_sequence.h"
 
 namespace segmorph::testing {
+
+// A triangle mesh in double precision, as the spectral stages take it.
+struct Mesh {
+  std::vector<double> positions;    // W × 3
+  std::vector<uint32_t> triangles;  // T × 3
+  size_t vertex_count() const { return positions.size() / 3; }
+};
 
 // A unit icosphere subdivided `levels` times (10 · 4^levels + 2 vertices), stretched by `stretch` along x.
 inline FrameSequence stretched_sphere(int levels, double stretch) {
