@@ -54,17 +54,12 @@ Status accessor_error(int index, const std::string& what, const std::string& mes
 // Checks that [offset, offset + length) lies inside bufferView `view` and returns a pointer to it.
 Status view_range(const tinygltf::Model& model, int view, size_t offset, size_t length, int index,
                   const std::string& what, const unsigned char** data) {
-  if (view < 0 || size_t(view) >= model.bufferViews.size())
-    return accessor_error(index, what, "bufferView " + std::to_string(view) + " does not exist");
-  const tinygltf::BufferView& bv = model.bufferViews[size_t(view)];
-  if (bv.buffer < 0 || size_t(bv.buffer) >= model.buffers.size())
-    return accessor_error(index, what, "bufferView " + std::to_string(view) + " names a missing buffer");
-  const tinygltf::Buffer& buffer = model.buffers[size_t(bv.buffer)];
-  if (bv.byteOffset > buffer.data.size() || bv.byteLength > buffer.data.size() - bv.byteOffset)
-    return accessor_error(index, what, "bufferView " + std::to_string(view) + " lies outside its buffer");
-  if (offset > bv.byteLength || length > bv.byteLength - offset)
+  size_t size = 0;
+  SEGMORPH_RETURN_IF_ERROR(
+      buffer_view_bytes(model, view, "accessor " + std::to_string(index) + " (" + what + ")", data, &size));
+  if (offset > size || length > size - offset)
     return accessor_error(index, what, "data lies outside bufferView " + std::to_string(view));
-  *data = buffer.data.data() + bv.byteOffset + offset;
+  *data += offset;
   return Status::Ok();
 }
 
@@ -145,6 +140,22 @@ Status read_accessor(const tinygltf::Model& model, int index, const std::string&
 }
 
 }  // namespace
+
+Status buffer_view_bytes(const tinygltf::Model& model, int view, const std::string& what, const unsigned char** data,
+                         size_t* size) {
+  auto error = [&](const std::string& message) {
+    return Status(StatusCode::bad_data, what + ": bufferView " + std::to_string(view) + " " + message);
+  };
+  if (view < 0 || size_t(view) >= model.bufferViews.size()) return error("does not exist");
+  const tinygltf::BufferView& bv = model.bufferViews[size_t(view)];
+  if (bv.buffer < 0 || size_t(bv.buffer) >= model.buffers.size()) return error("names a missing buffer");
+  const tinygltf::Buffer& buffer = model.buffers[size_t(bv.buffer)];
+  if (bv.byteOffset > buffer.data.size() || bv.byteLength > buffer.data.size() - bv.byteOffset)
+    return error("lies outside its buffer");
+  *data = buffer.data.data() + bv.byteOffset;
+  *size = bv.byteLength;
+  return Status::Ok();
+}
 
 int components_of_type(int type) {
   switch (type) {
@@ -267,6 +278,13 @@ int AccessorWriter::add_indices(const std::vector<uint32_t>& indices) {
   accessor.count = indices.size();
   accessor.type = TINYGLTF_TYPE_SCALAR;
   accessor.bufferView = add_view(indices.data(), indices.size() * sizeof(uint32_t), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+  model_.accessors.push_back(accessor);
+  return int(model_.accessors.size()) - 1;
+}
+
+int AccessorWriter::add_described(const float* data, size_t count, int type) {
+  tinygltf::Accessor accessor = float_accessor(count, type);
+  set_bounds(accessor, data, count, components_of_type(type));
   model_.accessors.push_back(accessor);
   return int(model_.accessors.size()) - 1;
 }

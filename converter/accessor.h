@@ -16,6 +16,10 @@ int components_of_type(int type);
 // Bytes of one component (TINYGLTF_COMPONENT_TYPE_*), 0 when unknown.
 int bytes_of_component(int component_type);
 
+// The bytes of bufferView `view`, checked against its buffer; `what` names it in errors.
+Status buffer_view_bytes(const tinygltf::Model& model, int view, const std::string& what, const unsigned char** data,
+                         size_t* size);
+
 // Reads accessor `index` as count × components floats, applying byteStride, normalization and sparse
 // substitution. Every offset is checked against its bufferView and buffer before it is read; an accessor
 // without bufferView reads as zeros, as the specification says. `what` names the accessor in errors.
@@ -35,6 +39,8 @@ class AccessorWriter {
   // count × components floats of type TINYGLTF_TYPE_*; min/max are written when `bounds` is set
   // (glTF requires them on POSITION). target: TINYGLTF_TARGET_ARRAY_BUFFER etc., 0 for none.
   int add_floats(const float* data, size_t count, int type, bool bounds, int target);
+  // An accessor with no bufferView whose min/max describe `data`, held elsewhere (by an extension).
+  int add_described(const float* data, size_t count, int type);
   // An accessor of `count` zero elements with no bufferView: glTF's compact form for all-zero data.
   int add_zeros(size_t count, int type, bool bounds);
   // A float accessor that is zero except for `indices` (strictly increasing element indices) whose

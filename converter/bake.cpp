@@ -106,6 +106,14 @@ tinygltf::Primitive bake_primitive(const tinygltf::Primitive& original, const Sa
 
 }  // namespace
 
+int source_node(const tinygltf::Node& node) {
+  if (!node.extras.IsObject() || !node.extras.Has("segmorph")) return -1;
+  const tinygltf::Value& provenance = node.extras.Get("segmorph");
+  return provenance.IsObject() && provenance.Has("source_node") && provenance.Get("source_node").IsNumber()
+             ? provenance.Get("source_node").GetNumberAsInt()
+             : -1;
+}
+
 Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled) {
   AccessorWriter writer(model);
   const std::vector<std::vector<bool>> members = scene_members(model);

@@ -31,4 +31,7 @@ namespace segmorph {
 // scene.animated, in that order.
 Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled);
 
+// The index, in the file it was baked from, of a node bake_model wrote (extras.segmorph.source_node), or -1.
+int source_node(const tinygltf::Node& node);
+
 }  // namespace segmorph

@@ -19,41 +19,17 @@ int type_of_components(int components) {
   }
 }
 
-int source_node_of(const tinygltf::Node& node) {
-  if (!node.extras.IsObject() || !node.extras.Has("segmorph")) return -1;
-  const tinygltf::Value& provenance = node.extras.Get("segmorph");
-  return provenance.IsObject() && provenance.Has("source_node") && provenance.Get("source_node").IsNumber()
-             ? provenance.Get("source_node").GetNumberAsInt()
-             : -1;
-}
-
-// The bytes of bufferView `index`, checked against its buffer.
-Status view_bytes(const tinygltf::Model& model, int index, const std::string& what, const uint8_t** data, size_t* size) {
-  if (index < 0 || size_t(index) >= model.bufferViews.size())
-    return Status(StatusCode::bad_data, what + " names bufferView " + std::to_string(index) + ", which does not exist");
-  const tinygltf::BufferView& view = model.bufferViews[size_t(index)];
-  if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size())
-    return Status(StatusCode::bad_data, what + ": its bufferView names a missing buffer");
-  const std::vector<unsigned char>& buffer = model.buffers[size_t(view.buffer)].data;
-  if (view.byteOffset > buffer.size() || view.byteLength > buffer.size() - view.byteOffset)
-    return Status(StatusCode::bad_data, what + ": its bufferView lies outside its buffer");
-  *data = buffer.data() + view.byteOffset;
-  *size = view.byteLength;
-  return Status::Ok();
-}
-
 }  // namespace
 
-Status compress_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled,
-                      const CodecSettings& settings, const DracoSettings& draco, CompressReport& report,
+Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sampled, const CodecSettings& settings,
+                      const DracoSettings& draco, CompressReport& report,
                       const std::function<void(const std::string&)>& progress) {
-  (void)scene;
   AccessorWriter writer(model);
   for (const SampledNode& node : sampled) {
     const AnimatedNode& animated = *node.node;
     int host = -1;
     for (size_t n = 0; n < model.nodes.size(); ++n)
-      if (source_node_of(model.nodes[n]) == animated.node && model.nodes[n].mesh >= 0) host = int(n);
+      if (source_node(model.nodes[n]) == animated.node && model.nodes[n].mesh >= 0) host = int(n);
     if (host < 0) return Status(StatusCode::invalid_argument, "compress_model needs a baked model");
     tinygltf::Mesh& mesh = model.meshes[size_t(model.nodes[size_t(host)].mesh)];
 
@@ -153,11 +129,10 @@ Status compress_model(tinygltf::Model& model, const Scene& scene, const std::vec
       out.extensions = primitive.extensions;
       for (const BaseMeshAttribute& attribute : decoded.attributes) {
         const int type = type_of_components(attribute.components);
-        const int accessor = attribute.semantic == "POSITION"
-                                 ? writer.add_floats(attribute.values.data(), decoded.vertex_count, type, true, 0)
-                                 : writer.add_zeros(decoded.vertex_count, type, false);
-        model.accessors[size_t(accessor)].bufferView = -1;  // the data is Draco's; bounds stay for POSITION
-        out.attributes[attribute.semantic] = accessor;
+        // The data is Draco's; POSITION keeps its bounds, as glTF requires.
+        out.attributes[attribute.semantic] = attribute.semantic == "POSITION"
+                                                 ? writer.add_described(attribute.values.data(), decoded.vertex_count, type)
+                                                 : writer.add_zeros(decoded.vertex_count, type, false);
       }
       // No indices accessor: the triangles are Draco's (KHR_draco_mesh_compression makes it optional), and
       // tinygltf 2.7 refuses to load an indices accessor without a bufferView.
@@ -189,9 +164,9 @@ Status decode_draco_primitives(tinygltf::Model& model) {
       const std::string what = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
       DracoPrimitive draco;
       SEGMORPH_RETURN_IF_ERROR(parse_draco_primitive(it->second, draco));
-      const uint8_t* data = nullptr;
+      const unsigned char* data = nullptr;
       size_t size = 0;
-      SEGMORPH_RETURN_IF_ERROR(view_bytes(model, draco.buffer_view, what + " " + kDracoExtensionName, &data, &size));
+      SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, draco.buffer_view, what + " " + kDracoExtensionName, &data, &size));
       BaseMesh decoded;
       const Status status = decode_draco_base_mesh(data, size, draco.attributes, decoded);
       if (!status.ok()) return Status(status.code(), what + ": " + status.message());
@@ -289,9 +264,9 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
       for (uint32_t index : triangles)
         if (index >= out.rest_positions.size() / 3) return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
 
-      const uint8_t* data = nullptr;
+      const unsigned char* data = nullptr;
       size_t size = 0;
-      SEGMORPH_RETURN_IF_ERROR(view_bytes(model, streams[i][p].buffer_view, what + " " + kExtensionName, &data, &size));
+      SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, streams[i][p].buffer_view, what + " " + kExtensionName, &data, &size));
       found.animation_bytes += size;
       ++found.primitives;
       const Status status = decode_animation(data, size, out.rest_positions, triangles, out.clips);

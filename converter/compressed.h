@@ -21,10 +21,10 @@ struct CompressReport {
   size_t draco_bytes = 0, animation_bytes = 0;
 };
 
-// `model` has just been baked (bake_model) from `scene` and `sampled`. Replaces each baked primitive's morph
-// targets by a Draco base mesh and an animation stream encoded with `settings`.
-Status compress_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled,
-                      const CodecSettings& settings, const DracoSettings& draco, CompressReport& report,
+// `model` has just been baked (bake_model) from `sampled`. Replaces each baked primitive's morph targets by a
+// Draco base mesh and an animation stream encoded with `settings`.
+Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sampled, const CodecSettings& settings,
+                      const DracoSettings& draco, CompressReport& report,
                       const std::function<void(const std::string&)>& progress);
 
 // Sizes of what decoding found.

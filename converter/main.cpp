@@ -232,7 +232,7 @@ int run_encode(const Options& options) {
   status = bake_model(file.model, file.scene, file.sampled);
   CompressReport report;
   if (status.ok())
-    status = compress_model(file.model, file.scene, file.sampled, options.codec, DracoSettings(), report,
+    status = compress_model(file.model, file.sampled, options.codec, DracoSettings(), report,
                             [&](const std::string& message) { progress(options, message); });
   if (!status.ok()) return fail(path, status);
   progress(options, "writing " + options.output);
@@ -288,12 +288,6 @@ int run_decode(const Options& options) {
   return 0;
 }
 
-int source_node_of(const tinygltf::Node& node) {
-  if (!node.extras.IsObject() || !node.extras.Has("segmorph") || !node.extras.Get("segmorph").IsObject()) return -1;
-  const tinygltf::Value& provenance = node.extras.Get("segmorph");
-  return provenance.Has("source_node") && provenance.Get("source_node").IsNumber() ? provenance.Get("source_node").GetNumberAsInt() : -1;
-}
-
 int run_verify(const Options& options) {
   SampledFile original, compressed;
   Status status = load_and_sample(options.inputs[0], options, original);
@@ -307,7 +301,7 @@ int run_verify(const Options& options) {
   for (const SampledNode& want : original.sampled) {
     const SampledNode* got = nullptr;
     for (const SampledNode& candidate : compressed.sampled) {
-      const int source = source_node_of(compressed.model.nodes[size_t(candidate.node->node)]);
+      const int source = source_node(compressed.model.nodes[size_t(candidate.node->node)]);
       if ((source >= 0 ? source : candidate.node->node) == want.node->node) got = &candidate;
     }
     const std::string node_label = node_name(original.model, want.node->node);

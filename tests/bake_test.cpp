@@ -43,12 +43,6 @@ float within_ulp(float base, float frame) {
   return std::nextafter(larger, INFINITY) - larger;
 }
 
-int source_node(const tinygltf::Node& node) {
-  if (!node.extras.IsObject() || !node.extras.Has("segmorph")) return -1;
-  const tinygltf::Value& provenance = node.extras.Get("segmorph");
-  return provenance.Has("source_node") ? provenance.Get("source_node").GetNumberAsInt() : -1;
-}
-
 // Bakes `path`, reads the result back and checks that it plays the frames sampled from the input: bit for bit
 // where base + delta can represent them (always when `exact`, as for sequences stored that way), otherwise
 // within one ulp of the base coordinate.

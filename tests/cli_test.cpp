@@ -12,6 +12,7 @@
 
 namespace {
 
+using segmorph::testing::json_number;
 using segmorph::testing::temporary_path;
 namespace fs = std::filesystem;
 
@@ -167,11 +168,6 @@ TEST(Cli, BakeWritesGlbAndGltfAndNothingElse) {
   EXPECT_NE(read_text(directory + "/morph.gltf").find("\"uri\": \"morph.bin\""), std::string::npos);
 }
 
-// One number from a JSON line printed by the tool ("key":value).
-double json_number(const std::string& json, const std::string& key) {
-  const size_t at = json.find("\"" + key + "\":");
-  return at == std::string::npos ? NAN : std::atof(json.c_str() + at + key.size() + 3);
-}
 
 TEST(Cli, EncodeDecodeAndVerify) {
   const std::string directory = output_directory("encode");

@@ -13,6 +13,7 @@
 
 namespace {
 
+using segmorph::testing::json_number;
 using segmorph::testing::temporary_path;
 
 std::string run_json(const std::string& arguments) {
@@ -23,11 +24,6 @@ std::string run_json(const std::string& arguments) {
   std::stringstream text;
   text << file.rdbuf();
   return text.str();
-}
-
-double json_number(const std::string& json, const std::string& key) {
-  const size_t at = json.find("\"" + key + "\":");
-  return at == std::string::npos ? NAN : std::atof(json.c_str() + at + key.size() + 3);
 }
 
 struct Target {

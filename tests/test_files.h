@@ -2,6 +2,8 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -21,6 +23,12 @@ inline std::vector<std::string> gltf_files_under(const std::string& directory) {
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+// One number from a JSON object the tool printed ("key":value); NaN when the key is missing.
+inline double json_number(const std::string& json, const std::string& key) {
+  const size_t at = json.find("\"" + key + "\":");
+  return at == std::string::npos ? NAN : std::atof(json.c_str() + at + key.size() + 3);
 }
 
 inline std::vector<std::string> bundled_samples() { return gltf_files_under(SEGMORPH_SAMPLES_DIR); }
