@@ -1,0 +1,236 @@
+// Google Benchmark of the codec's stages on one sequence (Release build, one core):
+//   codec_benchmark [FILE] [--error E] [--benchmark_filter=...] [other Google Benchmark flags]
+// FILE defaults to the cow sequence in ../shared/samples. The stream is encoded once at startup (at --error E,
+// default 0.15); the decoder benchmarks decode it, the encoder's stage benchmarks rerun one stage on the
+// encoder's own intermediate data. Counters: vertex-frames per second (vf/s) where it means something.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "codec.h"
+#include "diffusion.h"
+#include "gltf_io.h"
+#include "motion.h"
+#include "rate_control.h"
+#include "reconstruction.h"
+#include "sample.h"
+#include "segmentation.h"
+#include "stream.h"
+#include "topology.h"
+
+using namespace segmorph;
+
+namespace {
+
+// Everything the stage benchmarks start from.
+struct Fixture {
+  std::vector<FrameSequence> clips;
+  std::vector<float> base;  // the first frame, quantized as Draco's 14-bit default would
+  std::vector<uint8_t> stream;
+  StreamContent content;
+  WeldedTopology topology;
+  VertexAdjacency adjacency;
+  Trajectories trajectories;
+  std::vector<uint32_t> multiplicity;
+  std::vector<float> welded;
+  ResidualTraversal traversal;
+  std::vector<double> predictions;
+  size_t vertex_frames = 0;
+};
+Fixture* fixture = nullptr;
+
+std::vector<float> quantized_base(const FrameSequence& clip) {
+  std::vector<float> base(clip.frame(0), clip.frame(0) + clip.vertex_count * 3);
+  float low[3], high[3];
+  for (int c = 0; c < 3; ++c) low[c] = high[c] = base[size_t(c)];
+  for (size_t i = 0; i < base.size(); ++i) low[i % 3] = std::min(low[i % 3], base[i]), high[i % 3] = std::max(high[i % 3], base[i]);
+  const float range = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
+  for (size_t i = 0; i < base.size(); ++i) base[i] = low[i % 3] + std::round((base[i] - low[i % 3]) / range * 16383) * range / 16383;
+  return base;
+}
+
+bool set_up(const char* path, double error) {
+  tinygltf::Model model;
+  Scene scene;
+  SampledNode node;
+  Status status = load_gltf(path, model);
+  if (status.ok()) status = analyze_scene(model, scene);
+  if (status.ok() && scene.animated.empty()) status = Status(StatusCode::invalid_argument, "nothing is animated");
+  if (status.ok()) status = sample_node(model, scene, scene.animated[0], SampleSettings(), node);
+  CodecSettings settings;
+  settings.target = error;
+  Fixture& f = *fixture;
+  if (status.ok()) {
+    f.clips = node.primitives[0].clips;
+    f.base = quantized_base(f.clips[0]);
+    status = encode_animation(f.clips, f.base, settings, f.stream);
+  }
+  if (status.ok()) status = read_stream(f.stream.data(), f.stream.size(), f.base, f.content);
+  if (!status.ok()) {
+    std::fprintf(stderr, "codec_benchmark: %s: %s\n", path, status.message().c_str());
+    return false;
+  }
+  f.topology = weld_topology(f.clips);
+  f.adjacency = vertex_adjacency(f.topology);
+  f.trajectories.vertex_count = f.topology.welded_count();
+  for (const FrameSequence& clip : f.clips) {
+    f.trajectories.frame_count += clip.frame_count;
+    f.vertex_frames += clip.frame_count * clip.vertex_count;
+    for (size_t frame = 0; frame < clip.frame_count; ++frame)
+      for (uint32_t v : f.topology.representative)
+        for (int c = 0; c < 3; ++c) f.trajectories.positions.push_back(clip.frame(frame)[v * 3 + size_t(c)]);
+  }
+  f.multiplicity.assign(f.topology.welded_count(), 0);
+  for (uint32_t w : f.topology.welded_index) ++f.multiplicity[w];
+  f.welded = welded_base(f.base, f.content);
+  f.traversal = residual_traversal(f.content, f.clips[0].triangles);
+  f.predictions = predicted_frames(f.content, f.welded);
+  std::fprintf(stderr, "codec_benchmark: %s: V=%zu, %zu vertex-frames, stream %zu bytes\n", path,
+               f.clips[0].vertex_count, f.vertex_frames, f.stream.size());
+  return true;
+}
+
+void vertex_frame_rate(benchmark::State& state) {
+  state.counters["vf/s"] = benchmark::Counter(double(fixture->vertex_frames) * double(state.iterations()),
+                                              benchmark::Counter::kIsRate);
+}
+
+// --- Encoder ---
+
+void EncodeWhole(benchmark::State& state) {
+  CodecSettings settings;
+  std::vector<uint8_t> stream;
+  for (auto _ : state) {
+    Status status = encode_animation(fixture->clips, fixture->base, settings, stream);
+    benchmark::DoNotOptimize(stream.data());
+    if (!status.ok()) state.SkipWithError(status.message().c_str());
+  }
+  vertex_frame_rate(state);
+}
+BENCHMARK(EncodeWhole)->Unit(benchmark::kMillisecond);
+
+void EncodeSpectralMorseFunction(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  std::vector<double> positions(f.topology.welded_count() * 3);
+  for (size_t w = 0; w < f.topology.welded_count(); ++w)
+    for (int c = 0; c < 3; ++c) positions[w * 3 + size_t(c)] = f.clips[0].frame(0)[f.topology.representative[w] * 3 + size_t(c)];
+  for (auto _ : state) {
+    MorseFunction morse;
+    Status status = diffusion_morse_function(positions, f.topology, f.adjacency, DiffusionSettings(), morse);
+    benchmark::DoNotOptimize(morse.mu.data());
+    if (!status.ok()) state.SkipWithError(status.message().c_str());
+  }
+}
+BENCHMARK(EncodeSpectralMorseFunction)->Unit(benchmark::kMillisecond);
+
+void EncodeAffineMotion(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  Clusters clusters;
+  clusters.count = f.content.cluster_count;
+  clusters.label = f.content.labels;
+  for (auto _ : state) benchmark::DoNotOptimize(fit_affine_motion(f.welded.data(), f.trajectories, clusters).transforms.data());
+  vertex_frame_rate(state);
+}
+BENCHMARK(EncodeAffineMotion)->Unit(benchmark::kMillisecond);
+
+void EncodePrediction(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(predicted_frames(fixture->content, fixture->welded).data());
+  vertex_frame_rate(state);
+}
+BENCHMARK(EncodePrediction)->Unit(benchmark::kMillisecond);
+
+// One axis's closed-loop D(q), R(q) at state.range(0) candidate steps.
+void EncodeMeasureSubband(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  std::vector<double> steps = candidate_steps(f.content.residual_step[0]);
+  steps.resize(size_t(state.range(0)));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(measure_subband(f.content, f.traversal, f.predictions, f.trajectories.positions,
+                                             f.multiplicity, 0, steps).bits.data());
+  state.counters["vf/s"] = benchmark::Counter(double(f.vertex_frames) * double(steps.size()) * double(state.iterations()),
+                                              benchmark::Counter::kIsRate);
+}
+BENCHMARK(EncodeMeasureSubband)->Arg(1)->Arg(8)->Arg(13)->Unit(benchmark::kMillisecond);
+
+void EncodeEntropy(benchmark::State& state) {
+  std::vector<uint8_t> out;
+  for (auto _ : state) {
+    out.clear();
+    write_stream(fixture->content, fixture->base, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  vertex_frame_rate(state);
+}
+BENCHMARK(EncodeEntropy)->Unit(benchmark::kMillisecond);
+
+// --- Decoder ---
+
+void DecodeWhole(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  std::vector<FrameSequence> clips;
+  for (auto _ : state) {
+    Status status = decode_animation(f.stream.data(), f.stream.size(), f.base, f.clips[0].triangles, clips);
+    benchmark::DoNotOptimize(clips.data());
+    if (!status.ok()) state.SkipWithError(status.message().c_str());
+  }
+  vertex_frame_rate(state);
+}
+BENCHMARK(DecodeWhole)->Unit(benchmark::kMillisecond);
+
+void DecodeEntropy(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  for (auto _ : state) {
+    StreamContent content;
+    Status status = read_stream(f.stream.data(), f.stream.size(), f.base, content);
+    benchmark::DoNotOptimize(content.residuals.data());
+    if (!status.ok()) state.SkipWithError(status.message().c_str());
+  }
+  vertex_frame_rate(state);
+}
+BENCHMARK(DecodeEntropy)->Unit(benchmark::kMillisecond);
+
+void DecodeResiduals(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  for (auto _ : state) benchmark::DoNotOptimize(reconstruct_welded(f.content, f.traversal, f.predictions).data());
+  vertex_frame_rate(state);
+}
+BENCHMARK(DecodeResiduals)->Unit(benchmark::kMillisecond);
+
+// The practical limit of a decoder: copying the restored frames (V × F × 3 floats) once.
+void DecodeFrameCopyLimit(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  std::vector<float> copy;
+  for (auto _ : state)
+    for (const FrameSequence& clip : f.clips) {
+      copy.assign(clip.positions.begin(), clip.positions.end());
+      benchmark::DoNotOptimize(copy.data());
+    }
+  vertex_frame_rate(state);
+}
+BENCHMARK(DecodeFrameCopyLimit)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  std::string path = SEGMORPH_SOURCE_DIR "/../shared/samples/sequences/Cow_pcow/cow.glb";
+  double error = 0.15;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--error") == 0 && i + 1 < argc) error = std::atof(argv[++i]);
+    else if (argv[i][0] != '-') path = argv[i];
+    else {
+      std::fprintf(stderr, "codec_benchmark: unknown option %s\n", argv[i]);
+      return 2;
+    }
+  }
+  Fixture storage;
+  fixture = &storage;
+  if (!set_up(path.c_str(), error)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
