@@ -20,8 +20,8 @@ enum class RateMode {
 
 struct CodecSettings {
   RateMode mode = RateMode::error;
-  double target = 0.15;          // KG % (error) or bits per vertex per frame (bpvf)
-  size_t clusters = 0;           // K; 0 chooses automatically
+  double target = 0.15;  // KG % (error) or bits per vertex per frame (bpvf)
+  size_t clusters = 0;   // K; 0 chooses automatically
   // Stages of the paper that can be switched off, and additions beyond it (measured in docs/codec.md).
   bool curvature_refinement = true;  // Eq. 6
   bool motion_refinement = true;     // beyond the paper: boundary vertices follow the best-fitting motion
@@ -38,7 +38,7 @@ struct EncodeReport {
   double e_pi = 0;                    // E(Π) after refinement
   int refinement_iterations = 0;
   double residual_steps[3] = {0, 0, 0};
-  double kg_percent = 0;               // of the encoder's own reconstruction
+  double kg_percent = 0;  // of the encoder's own reconstruction
   size_t bytes_motion = 0, bytes_residuals = 0, bytes_total = 0;
   // Milliseconds per stage.
   double ms_segmentation = 0, ms_motion = 0, ms_prediction = 0, ms_rate_control = 0, ms_entropy = 0;

@@ -1,15 +1,16 @@
 #include "curvature.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Dense>
 
 namespace segmorph {
 
 std::vector<double> minimum_curvature(const std::vector<double>& positions, const WeldedTopology& topology) {
   const size_t vertex_count = topology.welded_count();
-  auto point = [&](uint32_t w) { return Eigen::Vector3d(positions[w * 3], positions[w * 3 + 1], positions[w * 3 + 2]); };
+  auto point = [&](uint32_t w) {
+    return Eigen::Vector3d(positions[w * 3], positions[w * 3 + 1], positions[w * 3 + 2]);
+  };
 
   // Area-weighted normals, and per directed edge (v, j) the area of the triangles beside it.
   std::vector<Eigen::Vector3d> normal(vertex_count, Eigen::Vector3d::Zero());
@@ -17,7 +18,8 @@ std::vector<double> minimum_curvature(const std::vector<double>& positions, cons
   std::vector<double> edge_area(adjacency.neighbour.size(), 0.0);
   std::vector<int> edge_triangles(adjacency.neighbour.size(), 0);
   auto edge_slot = [&](uint32_t v, uint32_t j) {
-    const auto begin = adjacency.neighbour.begin() + adjacency.offset[v], end = adjacency.neighbour.begin() + adjacency.offset[v + 1];
+    const auto begin = adjacency.neighbour.begin() + adjacency.offset[v],
+               end = adjacency.neighbour.begin() + adjacency.offset[v + 1];
     return size_t(std::lower_bound(begin, end, j) - adjacency.neighbour.begin());
   };
   for (size_t t = 0; t < topology.triangles.size(); t += 3) {

@@ -14,8 +14,8 @@ namespace segmorph {
 // curvature towards neighbour j, T_j the unit projection of v_j − v on the tangent plane, w_j proportional to
 // the area of the triangles on edge (v, v_j); the eigenvalues m1 ≥ m2 of M in the tangent plane give
 // κ1 = 3 m1 − m2, κ2 = 3 m2 − m1. Sign: positive where the surface bends away from its normal (a convex
-// bump; a unit sphere has κ = 1), negative across a concave crease. Vertices without triangles, and vertices on an open border (where half
-// the ring is missing and the estimate means nothing), get 0.
+// bump; a unit sphere has κ = 1), negative across a concave crease. Vertices without triangles, and vertices on an open
+// border (where half the ring is missing and the estimate means nothing), get 0.
 std::vector<double> minimum_curvature(const std::vector<double>& positions, const WeldedTopology& topology);
 
 }  // namespace segmorph

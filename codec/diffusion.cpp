@@ -72,7 +72,8 @@ std::vector<double> edge_path_distances(const std::vector<double>& positions, co
 }
 
 Status diffusion_morse_function(const std::vector<double>& positions, const WeldedTopology& topology,
-                                const VertexAdjacency& adjacency, const DiffusionSettings& settings, MorseFunction& out) {
+                                const VertexAdjacency& adjacency, const DiffusionSettings& settings,
+                                MorseFunction& out) {
   const size_t vertex_count = topology.welded_count();
   out = MorseFunction();
   out.mu.assign(vertex_count, 0.0);

@@ -29,20 +29,21 @@
 namespace segmorph {
 
 struct DiffusionSettings {
-  size_t eigenpairs = 40;     // per component, the constant one included
-  double epsilon = 0.074;     // extremum neighbourhood, as a fraction of sqrt(component area)
-  int time_samples = 24;      // log-spaced times of the integral over [t1, t2]
+  size_t eigenpairs = 40;  // per component, the constant one included
+  double epsilon = 0.074;  // extremum neighbourhood, as a fraction of sqrt(component area)
+  int time_samples = 24;   // log-spaced times of the integral over [t1, t2]
 };
 
 struct MorseFunction {
-  std::vector<double> mu;                                 // W
-  std::vector<uint32_t> feature_points;                   // welded vertices, all components
-  std::vector<std::array<uint32_t, 2>> farthest_points;   // per component: v1, v2
+  std::vector<double> mu;                                // W
+  std::vector<uint32_t> feature_points;                  // welded vertices, all components
+  std::vector<std::array<uint32_t, 2>> farthest_points;  // per component: v1, v2
 };
 
 // μ over the welded mesh whose first-frame positions are `positions` (W × 3 doubles, row-major).
 Status diffusion_morse_function(const std::vector<double>& positions, const WeldedTopology& topology,
-                                const VertexAdjacency& adjacency, const DiffusionSettings& settings, MorseFunction& out);
+                                const VertexAdjacency& adjacency, const DiffusionSettings& settings,
+                                MorseFunction& out);
 
 // Geodesic (edge-path) distances from `source` to every welded vertex (infinity where unreachable).
 std::vector<double> edge_path_distances(const std::vector<double>& positions, const VertexAdjacency& adjacency,

@@ -1,16 +1,16 @@
 #include "eigensolver.h"
 
+#include <Spectra/SymGEigsShiftSolver.h>
+#include <Spectra/Util/SimpleRandom.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <exception>
 #include <new>
 #include <string>
-
-#include <Eigen/Eigenvalues>
-#include <Eigen/SparseCholesky>
-#include <Spectra/SymGEigsShiftSolver.h>
-#include <Spectra/Util/SimpleRandom.h>
 
 namespace segmorph {
 namespace {
@@ -196,16 +196,15 @@ Status shift_invert_eigenpairs(const SparseMatrix& stiffness, const Eigen::Vecto
     const double tau = 0.5 * (out.values[found_below - 1] + last);
     const Eigen::Index below = eigenvalues_below(stiffness, mass, tau);
     if (below < 0) {
-      return Status(StatusCode::numerical, "eigensolver: the inertia check met a zero pivot (" + std::to_string(n) +
-                                               " vertices)");
+      return Status(StatusCode::numerical,
+                    "eigensolver: the inertia check met a zero pivot (" + std::to_string(n) + " vertices)");
     }
     if (below <= found_below) return Status::Ok();
     if (deflation == kMaxDeflations) {
-      return Status(StatusCode::numerical, "eigensolver: " + std::to_string(below) + " eigenvalues lie below " +
-                                               std::to_string(tau) + " but Lanczos found " +
-                                               std::to_string(found_below) + " after " +
-                                               std::to_string(kMaxDeflations) + " deflated restarts (" +
-                                               std::to_string(n) + " vertices)");
+      return Status(StatusCode::numerical,
+                    "eigensolver: " + std::to_string(below) + " eigenvalues lie below " + std::to_string(tau) +
+                        " but Lanczos found " + std::to_string(found_below) + " after " +
+                        std::to_string(kMaxDeflations) + " deflated restarts (" + std::to_string(n) + " vertices)");
     }
     locked = out.vectors.leftCols(found_below);
     Eigen::MatrixXd fresh;
@@ -229,8 +228,8 @@ void normalize(Eigenpairs& pairs) {
 
 }  // namespace
 
-Status smallest_eigenpairs(const SparseMatrix& stiffness, const Eigen::VectorXd& mass, size_t count,
-                           Eigenpairs& out, const EigenSettings& settings) {
+Status smallest_eigenpairs(const SparseMatrix& stiffness, const Eigen::VectorXd& mass, size_t count, Eigenpairs& out,
+                           const EigenSettings& settings) {
   assert(stiffness.rows() == stiffness.cols() && stiffness.rows() == mass.size());
   assert(mass.size() == 0 || mass.minCoeff() > 0);
   const Eigen::Index n = stiffness.rows();
@@ -243,9 +242,9 @@ Status smallest_eigenpairs(const SparseMatrix& stiffness, const Eigen::VectorXd&
   bool dense = settings.method == EigenMethod::dense;
   if (settings.method == EigenMethod::automatic) dense = size_t(n) <= settings.dense_limit || 2 * wanted >= n;
   if (!dense && wanted >= n - 1) {
-    return Status(StatusCode::invalid_argument, "eigensolver: shift-invert finds at most W - 2 = " +
-                                                    std::to_string(n - 2) + " eigenpairs, " +
-                                                    std::to_string(wanted) + " asked");
+    return Status(StatusCode::invalid_argument,
+                  "eigensolver: shift-invert finds at most W - 2 = " + std::to_string(n - 2) + " eigenpairs, " +
+                      std::to_string(wanted) + " asked");
   }
   Status status;
   try {

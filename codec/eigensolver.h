@@ -14,12 +14,11 @@
 // This file is the only one that sees Spectra; its exceptions become a Status here.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/SparseCore>
 
 #include "laplacian.h"
 #include "status.h"

@@ -30,14 +30,15 @@ constexpr size_t kMaxAutomaticClusters = 24;
 constexpr int kWeightBits = 8;
 // Motion quantizer steps relative to the mean residual step: translation β q̄, linear β q̄ / (RMS radius).
 constexpr double kMotionStepRatio = 0.5;
-// Other ratios tried with an error target.
-constexpr double kMotionStepRatioTrials[] = {1.0, 2.0, 4.0};
+// Other ratios tried with an error target (which one wins depends on the sequence: docs/codec.md).
+constexpr double kMotionStepRatioTrials[] = {0.25, 1.0};
 
 Status check_input(const std::vector<FrameSequence>& clips, const std::vector<float>& base) {
   if (clips.empty()) return Status(StatusCode::invalid_argument, "no clips to encode");
   const size_t vertex_count = clips[0].vertex_count;
   if (vertex_count == 0) return Status(StatusCode::invalid_argument, "no vertices to encode");
-  if (base.size() != vertex_count * 3) return Status(StatusCode::invalid_argument, "the base mesh has another vertex count");
+  if (base.size() != vertex_count * 3)
+    return Status(StatusCode::invalid_argument, "the base mesh has another vertex count");
   for (const FrameSequence& clip : clips) {
     if (clip.vertex_count != vertex_count || clip.triangles != clips[0].triangles || clip.frame_count == 0 ||
         clip.positions.size() != clip.frame_count * vertex_count * 3)
@@ -61,7 +62,8 @@ double frame_spread(const std::vector<FrameSequence>& clips) {
         for (int c = 0; c < 3; ++c) centroid[c] += frame[v * 3 + size_t(c)];
       for (double& c : centroid) c /= double(clip.vertex_count);
       for (size_t v = 0; v < clip.vertex_count; ++v)
-        for (int c = 0; c < 3; ++c) spread += (frame[v * 3 + size_t(c)] - centroid[c]) * (frame[v * 3 + size_t(c)] - centroid[c]);
+        for (int c = 0; c < 3; ++c)
+          spread += (frame[v * 3 + size_t(c)] - centroid[c]) * (frame[v * 3 + size_t(c)] - centroid[c]);
     }
   return spread;
 }
@@ -76,7 +78,8 @@ void quantize_motion(const AffineMotion& fitted, double linear_step, double tran
       const double* t = fitted.transform(f, k);
       int32_t* q = &content.motion[(f * fitted.cluster_count + k) * 12];
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) q[r * 3 + c] = int32_t(std::llround((t[r * 4 + c] - (r == c ? 1.0 : 0.0)) / linear));
+        for (int c = 0; c < 3; ++c)
+          q[r * 3 + c] = int32_t(std::llround((t[r * 4 + c] - (r == c ? 1.0 : 0.0)) / linear));
         q[9 + r] = int32_t(std::llround((t[r * 4 + 3] - fitted.centroid[k * 3 + size_t(r)]) / translation));
       }
     }
@@ -93,7 +96,8 @@ void quantize_weights(const ClusterWeights& weights, StreamContent& content) {
     std::vector<std::pair<double, uint32_t>> extra;
     for (uint32_t i = weights.offset[w]; i < weights.offset[w + 1]; ++i)
       if (weights.cluster[i] != content.labels[w]) extra.push_back({weights.weight[i], weights.cluster[i]});
-    std::sort(extra.begin(), extra.end(), [](const auto& a, const auto& b) { return std::fabs(a.first) > std::fabs(b.first); });
+    std::sort(extra.begin(), extra.end(),
+              [](const auto& a, const auto& b) { return std::fabs(a.first) > std::fabs(b.first); });
     extra.resize(std::min<size_t>(extra.size(), format::kMaxExtraWeights));
     std::sort(extra.begin(), extra.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
     for (const auto& [weight, cluster] : extra) {
@@ -153,9 +157,8 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   MorseBands bands;
   const MorseSettings morse_settings;
   Clusters clusters = morse_segmentation(morse.mu, topology, adjacency, morse_settings, &bands);
-  report.e_pi_before_refinement =
-      motion_compensation_error(base_welded.data(), trajectories, clusters,
-                                fit_affine_motion(base_welded.data(), trajectories, clusters));
+  report.e_pi_before_refinement = motion_compensation_error(
+      base_welded.data(), trajectories, clusters, fit_affine_motion(base_welded.data(), trajectories, clusters));
   if (settings.curvature_refinement) {
     const MorseBands refined = refine_levels(morse.mu, minimum_curvature(positions, topology), topology, adjacency,
                                              bands, RefinementSettings(), &report.refinement_iterations);
@@ -178,9 +181,9 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   // The scale of the residual steps: from the target error when there is one, else from the motion error.
   const double spread = frame_spread(clips);
   const double samples = 3.0 * double(vertex_count) * double(frames_total);
-  double mean_step = std::sqrt(12.0 * std::max(report.e_pi, 1e-12)) * bounding_box_diagonal(base.data(), vertex_count) * 0.1;
-  if (settings.mode == RateMode::error)
-    mean_step = std::sqrt(12.0 * spread / samples) * settings.target / 100.0;
+  double mean_step =
+      std::sqrt(12.0 * std::max(report.e_pi, 1e-12)) * bounding_box_diagonal(base.data(), vertex_count) * 0.1;
+  if (settings.mode == RateMode::error) mean_step = std::sqrt(12.0 * spread / samples) * settings.target / 100.0;
   double radius = 0;
   for (size_t w = 0; w < welded; ++w)
     for (int c = 0; c < 3; ++c) {
@@ -192,11 +195,16 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   std::vector<double> predictions;
   StepChoice choice;
   SubbandCurve curves[3];
-  // Measures more candidate steps of one subband and adds them to its curve.
-  auto extend = [&](int axis, const std::vector<double>& steps) {
-    const SubbandCurve more = measure_subband(content, traversal, predictions, trajectories.positions, multiplicity,
-                                              axis, steps);
+  // Measures more candidate steps of one subband (those not measured yet) and adds them to its curve.
+  auto extend = [&](int axis, const std::vector<double>& candidates) {
     SubbandCurve& curve = curves[axis];
+    std::vector<double> steps;
+    for (double step : candidates)
+      if (std::find(curve.step.begin(), curve.step.end(), double(float(step))) == curve.step.end())
+        steps.push_back(step);
+    if (steps.empty()) return;
+    const SubbandCurve more =
+        measure_subband(content, traversal, predictions, trajectories.positions, multiplicity, axis, steps);
     curve.step.insert(curve.step.end(), more.step.begin(), more.step.end());
     curve.distortion.insert(curve.distortion.end(), more.distortion.begin(), more.distortion.end());
     curve.bits.insert(curve.bits.end(), more.bits.begin(), more.bits.end());
@@ -235,10 +243,10 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     quantize_motion(fitted, settings.mode == RateMode::lossless ? 1e-6 : motion_step / radius,
                     settings.mode == RateMode::lossless ? 1e-6 * radius : motion_step, content);
     const AffineMotion motion = dequantized_motion(content, base_welded);
-    const ClusterWeights weights =
-        settings.blend_weights ? fit_cluster_weights(base_welded.data(), trajectories, clusters, motion,
-                                                     adjacency.offset, adjacency.neighbour, 2, 4)
-                               : own_cluster_weights(clusters);
+    const ClusterWeights weights = settings.blend_weights
+                                       ? fit_cluster_weights(base_welded.data(), trajectories, clusters, motion,
+                                                             adjacency.offset, adjacency.neighbour, 2, 4)
+                                       : own_cluster_weights(clusters);
     quantize_weights(weights, content);
     report.ms_motion += milliseconds_since(begin);
     begin = Clock::now();
@@ -258,17 +266,21 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
                ? steps_for_distortion(curves, std::pow(settings.target / 100.0, 2) * spread)
                : steps_for_bits(curves, residual_budget);
   };
-  // The residual steps for the current predictions: coarse candidates (every fourth), then refined.
-  auto residual_rate_control = [&] {
+  // The residual steps for the current predictions: coarse candidates an octave apart around the expected step
+  // (unless the curves already hold measurements for these predictions), then refined.
+  auto residual_rate_control = [&](bool fresh) {
     const auto begin = Clock::now();
     if (settings.mode == RateMode::bpvf)
       residual_budget = std::max(0.0, settings.target * double(vertex_count) * double(frames_total) -
                                           8.0 * double(side_bytes() + settings.outside_bytes));
-    const std::vector<double> all = candidate_steps(mean_step);
-    std::vector<double> coarse;
-    for (size_t j = 0; j < all.size(); j += 4) coarse.push_back(all[j]);
-    for (int axis = 0; axis < 3; ++axis)
-      curves[axis] = measure_subband(content, traversal, predictions, trajectories.positions, multiplicity, axis, coarse);
+    if (fresh) {
+      std::vector<double> coarse;
+      for (int j = -3; j <= 3; ++j) coarse.push_back(mean_step * std::exp2(j));
+      for (int axis = 0; axis < 3; ++axis) {
+        curves[axis] = SubbandCurve();
+        extend(axis, coarse);
+      }
+    }
     choice = choose();
     refine(choice, choose);
     for (int axis = 0; axis < 3; ++axis) content.residual_step[axis] = float(curves[axis].step[choice.index[axis]]);
@@ -278,38 +290,45 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   // The motion steps trade side information against prediction quality. They are tied to the residual step:
   // motion step = β × mean residual step. With a rate target, two passes (the second with the first's residual
   // steps) at β = kMotionStepRatio. With an error target the residual step is known in advance; β is chosen
-  // among a few values by the estimated total size, each estimated with the residual steps of the first.
+  // among a few values by the estimated total size, each trial measured at the steps around the first's choice
+  // and the winner's measurements then refined.
   if (settings.mode == RateMode::lossless) {
     prepare_motion(0);
   } else if (settings.mode == RateMode::bpvf) {
     for (int pass = 0; pass < 2; ++pass) {
       prepare_motion(kMotionStepRatio * mean_step);
-      residual_rate_control();
+      residual_rate_control(true);
       mean_step = (content.residual_step[0] + content.residual_step[1] + content.residual_step[2]) / 3.0;
     }
   } else {
     const double guess = mean_step;
+    const double max_distortion = std::pow(settings.target / 100.0, 2) * spread;
     prepare_motion(kMotionStepRatio * guess);
-    residual_rate_control();
+    residual_rate_control(true);
     const StepChoice first = choice;
     double best_ratio = kMotionStepRatio, best_bytes = double(side_bytes()) + choice.bits / 8;
-    const SubbandCurve kept[3] = {curves[0], curves[1], curves[2]};
+    SubbandCurve best_curves[3] = {curves[0], curves[1], curves[2]};
+    const SubbandCurve first_curves[3] = {curves[0], curves[1], curves[2]};
     for (double ratio : kMotionStepRatioTrials) {
       prepare_motion(ratio * guess);
       const auto begin = Clock::now();
       for (int axis = 0; axis < 3; ++axis) {
+        curves[axis] = SubbandCurve();
         std::vector<double> near;
-        for (int j = -2; j <= 2; ++j) near.push_back(kept[axis].step[first.index[axis]] * std::exp2(j / 4.0));
-        curves[axis] = measure_subband(content, traversal, predictions, trajectories.positions, multiplicity, axis, near);
+        for (int j = -1; j <= 1; ++j) near.push_back(first_curves[axis].step[first.index[axis]] * std::exp2(j / 4.0));
+        extend(axis, near);
       }
       const StepChoice trial = choose();
       report.ms_rate_control += milliseconds_since(begin);
       const double bytes = double(side_bytes()) + trial.bits / 8;
-      if (trial.distortion <= std::pow(settings.target / 100.0, 2) * spread && bytes < best_bytes)
+      if (trial.distortion <= max_distortion && bytes < best_bytes) {
         best_bytes = bytes, best_ratio = ratio;
+        for (int axis = 0; axis < 3; ++axis) best_curves[axis] = curves[axis];
+      }
     }
     prepare_motion(best_ratio * guess);
-    residual_rate_control();
+    for (int axis = 0; axis < 3; ++axis) curves[axis] = best_curves[axis];
+    residual_rate_control(false);
   }
 
   // Residual symbols by the decoder's own loop, then the stream.
@@ -318,14 +337,25 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   StreamSizes sizes;
   auto encode_residuals = [&] {
     content.residuals.assign(predictions.size(), 0);
-    residual_loop(
-        content, traversal, predictions,
-        [&](size_t index, double p, double r) -> int64_t {
-          const float x = trajectories.positions[index];
-          if (lossless) return content.residuals[index] = ordered_bits(x) - ordered_bits(float(p + r));
-          return content.residuals[index] = quantizer_index((double(x) - p - r) / double(content.residual_step[index % 3]));
-        },
-        [&](size_t index, float x) { decoded[index] = x; });
+    double inverse_step[3];
+    for (int axis = 0; axis < 3; ++axis) inverse_step[axis] = 1.0 / double(content.residual_step[axis]);
+    ResidualReconstructor reconstructor(content, traversal);
+    const size_t row = welded * 3;
+    size_t frame = 0;
+    for (uint32_t frames_in_clip : content.clip_frames) {
+      reconstructor.start_clip();
+      for (uint32_t f = 0; f < frames_in_clip; ++f, ++frame) {
+        const size_t offset = frame * row;
+        reconstructor.frame(
+            &predictions[offset],
+            [&](size_t i, double p, double r) -> int64_t {
+              const float x = trajectories.positions[offset + i];
+              if (lossless) return content.residuals[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
+              return content.residuals[offset + i] = quantizer_index((double(x) - p - r) * inverse_step[i % 3]);
+            },
+            [&](size_t i, float x) { decoded[offset + i] = x; });
+      }
+    }
     stream.clear();
     write_stream(content, base, stream, &sizes);
   };

@@ -16,11 +16,10 @@
 // width ~sqrt(δ·l). On a mesh without (near-)degenerate triangles δ = 0 and nothing changes.
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cstdint>
+#include <vector>
 
 #include "status.h"
 #include "topology.h"

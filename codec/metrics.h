@@ -16,11 +16,11 @@ namespace segmorph {
 double bounding_box_diagonal(const float* positions, size_t vertex_count);
 
 struct ErrorMetrics {
-  size_t vertices = 0;              // V
-  size_t frames = 0;                // F, over all clips
-  double kg_percent = 0;            // KG error in %
-  double rmse_over_diagonal = 0;    // mean per-frame RMSE / first frame's bounding-box diagonal
-  double max_error = 0;             // largest vertex distance, model units
+  size_t vertices = 0;            // V
+  size_t frames = 0;              // F, over all clips
+  double kg_percent = 0;          // KG error in %
+  double rmse_over_diagonal = 0;  // mean per-frame RMSE / first frame's bounding-box diagonal
+  double max_error = 0;           // largest vertex distance, model units
   double max_error_over_diagonal = 0;
 };
 
@@ -34,9 +34,9 @@ class ErrorAccumulator {
  private:
   size_t vertices_ = 0, frames_ = 0;
   double diagonal_ = -1;
-  double error_squared_ = 0;     // ‖A − Ã‖²_F
-  double spread_squared_ = 0;    // ‖A − E(A)‖²_F
-  double rmse_sum_ = 0;          // Σ over frames of that frame's RMSE
+  double error_squared_ = 0;   // ‖A − Ã‖²_F
+  double spread_squared_ = 0;  // ‖A − E(A)‖²_F
+  double rmse_sum_ = 0;        // Σ over frames of that frame's RMSE
   double max_error_ = 0;
 };
 

@@ -1,10 +1,9 @@
 #include "motion.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cassert>
 #include <cmath>
-
-#include <Eigen/Dense>
 
 namespace segmorph {
 namespace {
@@ -73,7 +72,8 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
     for (size_t k = 0; k < cluster_count; ++k) mean[k] /= double(std::max<size_t>(size[k], 1));
     for (size_t v = 0; v < vertex_count; ++v) {
       const uint32_t k = clusters.label[v];
-      moments[k] += (Eigen::Vector3d(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]) - mean[k]) * centred[v].transpose();
+      moments[k] +=
+          (Eigen::Vector3d(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]) - mean[k]) * centred[v].transpose();
     }
     for (size_t k = 0; k < cluster_count; ++k) {
       Eigen::JacobiSVD<Eigen::Matrix3d> svd(moments[k], Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -200,13 +200,15 @@ ClusterWeights fit_cluster_weights(const float* base, const Trajectories& frames
         }
         right(Eigen::Index(a)) += pa[0] * y[0] + pa[1] * y[1] + pa[2] * y[2];
         const double* po = &predictions[(f * m_all + kept[0]) * 3];
-        spread += (pa[0] - po[0]) * (pa[0] - po[0]) + (pa[1] - po[1]) * (pa[1] - po[1]) + (pa[2] - po[2]) * (pa[2] - po[2]);
+        spread +=
+            (pa[0] - po[0]) * (pa[0] - po[0]) + (pa[1] - po[1]) * (pa[1] - po[1]) + (pa[2] - po[2]) * (pa[2] - po[2]);
       }
     }
     normal = normal.selfadjointView<Eigen::Upper>();
     const double rho = 1e-4 * spread / double(m - 1) + 1e-300;
     Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(Eigen::Index(m + 1), Eigen::Index(m + 1));
-    kkt.topLeftCorner(Eigen::Index(m), Eigen::Index(m)) = normal + rho * Eigen::MatrixXd::Identity(Eigen::Index(m), Eigen::Index(m));
+    kkt.topLeftCorner(Eigen::Index(m), Eigen::Index(m)) =
+        normal + rho * Eigen::MatrixXd::Identity(Eigen::Index(m), Eigen::Index(m));
     kkt.block(0, Eigen::Index(m), Eigen::Index(m), 1).setOnes();
     kkt.block(Eigen::Index(m), 0, 1, Eigen::Index(m)).setOnes();
     Eigen::VectorXd rhs(Eigen::Index(m + 1));

@@ -10,8 +10,8 @@ namespace segmorph {
 
 // The welded trajectories the codec works on: W vertices over F frames (all clips end to end).
 struct Trajectories {
-  size_t vertex_count = 0;     // W
-  size_t frame_count = 0;      // F
+  size_t vertex_count = 0;       // W
+  size_t frame_count = 0;        // F
   std::vector<float> positions;  // F × W × 3, frame-major
 
   const float* frame(size_t f) const { return positions.data() + f * vertex_count * 3; }
@@ -19,8 +19,8 @@ struct Trajectories {
 
 // A partition of the welded vertices into K clusters (the key vector π).
 struct Clusters {
-  size_t count = 0;              // K
-  std::vector<uint32_t> label;   // W: cluster of each vertex, < K
+  size_t count = 0;             // K
+  std::vector<uint32_t> label;  // W: cluster of each vertex, < K
 };
 
 // Affine transforms in centred form: frame i maps a base position x of cluster k to
@@ -28,8 +28,8 @@ struct Clusters {
 // c_k the centroid of cluster k in the base frame, L_ik 3 × 3, t_ik the translation (the centroid's image).
 // Centring keeps the 12 coefficients well conditioned and makes t a position, which predicts well in time.
 struct AffineMotion {
-  size_t cluster_count = 0;     // K
-  size_t frame_count = 0;       // F
+  size_t cluster_count = 0;      // K
+  size_t frame_count = 0;        // F
   std::vector<double> centroid;  // K × 3
   // F × K × 12: row-major 3 × 4 [L | t] per frame and cluster.
   std::vector<double> transforms;

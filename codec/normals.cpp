@@ -9,15 +9,31 @@ struct Vec3 {
   double x, y, z;
 };
 
-Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3 operator+(Vec3 a, Vec3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec3 operator*(Vec3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-double dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-double length(Vec3 a) { return std::sqrt(dot(a, a)); }
+Vec3 operator-(Vec3 a, Vec3 b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+Vec3 operator+(Vec3 a, Vec3 b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+Vec3 operator*(Vec3 a, double s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+double dot(Vec3 a, Vec3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+Vec3 cross(Vec3 a, Vec3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+double length(Vec3 a) {
+  return std::sqrt(dot(a, a));
+}
 
-Vec3 load(const float* p, size_t i) { return {p[i * 3], p[i * 3 + 1], p[i * 3 + 2]}; }
-Vec3 load(const double* p, size_t i) { return {p[i * 3], p[i * 3 + 1], p[i * 3 + 2]}; }
+Vec3 load(const float* p, size_t i) {
+  return {p[i * 3], p[i * 3 + 1], p[i * 3 + 2]};
+}
+Vec3 load(const double* p, size_t i) {
+  return {p[i * 3], p[i * 3 + 1], p[i * 3 + 2]};
+}
 
 // Rotates x by the smallest rotation taking unit vector a to unit vector b (Rodrigues' formula in the
 // form R x = c x + v × x + v (v·x) / (1 + c), v = a × b, c = a·b).
@@ -52,8 +68,8 @@ std::vector<double> welded_vertex_normals(const float* positions, const WeldedTo
   return normals;
 }
 
-void deform_normals(const std::vector<double>& rest_geometric, const float* rest_normals,
-                    const float* frame_positions, const WeldedTopology& topology, float* out) {
+void deform_normals(const std::vector<double>& rest_geometric, const float* rest_normals, const float* frame_positions,
+                    const WeldedTopology& topology, float* out) {
   const std::vector<double> frame_geometric = welded_vertex_normals(frame_positions, topology);
   for (size_t v = 0; v < topology.welded_index.size(); ++v) {
     const uint32_t w = topology.welded_index[v];

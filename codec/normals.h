@@ -24,7 +24,7 @@ void deform_normals(const float* rest_positions, const float* rest_normals, cons
                     const WeldedTopology& topology, float* out);
 
 // The same, reusing the rest geometric normals (from welded_vertex_normals) across many frames.
-void deform_normals(const std::vector<double>& rest_geometric, const float* rest_normals,
-                    const float* frame_positions, const WeldedTopology& topology, float* out);
+void deform_normals(const std::vector<double>& rest_geometric, const float* rest_normals, const float* frame_positions,
+                    const WeldedTopology& topology, float* out);
 
 }  // namespace segmorph

@@ -1,10 +1,10 @@
 #include "rate_control.h"
 
-#include "stream_format.h"
-
 #include <algorithm>
 #include <cmath>
 #include <vector>
+
+#include "stream_format.h"
 
 namespace segmorph {
 namespace {
@@ -14,7 +14,7 @@ namespace {
 // learning each context's distribution (half a bit per distinct symbol and context, roughly).
 struct EntropyCounter {
   static constexpr int64_t kRange = 512;  // symbols in [−512, 512] are counted; larger ones are estimated
-  std::vector<double> counts = std::vector<double>(3 * (2 * kRange + 1), 0.0);
+  std::vector<uint32_t> counts = std::vector<uint32_t>(3 * (2 * kRange + 1), 0);
   double total[3] = {0, 0, 0};
   double large_bits = 0;
 
@@ -32,7 +32,7 @@ struct EntropyCounter {
     for (int c = 0; c < 3; ++c) {
       if (total[c] == 0) continue;
       for (int64_t j = 0; j < 2 * kRange + 1; ++j) {
-        const double count = counts[size_t(c * (2 * kRange + 1) + j)];
+        const double count = double(counts[size_t(c * (2 * kRange + 1) + j)]);
         if (count == 0) continue;
         sum -= count * std::log2(count / total[c]);
         sum += 0.5 * std::log2(1 + total[c]);  // learning the distribution
@@ -50,43 +50,92 @@ std::vector<double> candidate_steps(double around) {
   return steps;
 }
 
+constexpr double kIndexLimit = 1 << 30;
+
+// One vertex and coordinate at `count` steps: the residual quantized as the encoder does (quantizer_index, in a
+// form the compiler vectorizes: indices are clamped to ±2^30, which only a step far too small to ever be chosen
+// reaches), the reconstructed residual, its change from `last` and the distortion of the reconstructed position.
+void quantize_steps(size_t count, double p, double target, double weight, const double* __restrict r,
+                    const double* __restrict q, const double* __restrict inverse_q, const double* __restrict last,
+                    double* __restrict current, double* __restrict change, int32_t* __restrict symbol,
+                    double* __restrict distortion) {
+  for (size_t s = 0; s < count; ++s) {
+    double x = (target - p - r[s]) * inverse_q[s];
+    x = std::min(std::max(x + std::copysign(0.5, x), -kIndexLimit), kIndexLimit);
+    const int32_t k = int32_t(x);
+    const double reconstructed = r[s] + double(k) * q[s];
+    current[s] = reconstructed;
+    change[s] = reconstructed - last[s];
+    const double error = double(float(p + reconstructed)) - target;
+    distortion[s] += weight * error * error;
+    symbol[s] = k;
+  }
+}
+
+// The steps are measured together, in one walk over the frames: every array below holds, per welded vertex, one
+// value per step side by side (vertex v, step s at v · S + s). The steps' loops are independent, so the
+// processor overlaps them instead of waiting on one vertex's chain of dependent divisions at a time; each step
+// still sees exactly the arithmetic of the decoder's loop, in the same order. Arrays are by position in the
+// traversal, so the walk reads them front to back and a vertex's earlier neighbours are mostly close behind.
 SubbandCurve measure_subband(const StreamContent& content, const ResidualTraversal& traversal,
                              const std::vector<double>& predictions, const std::vector<float>& targets,
                              const std::vector<uint32_t>& multiplicity, int axis, const std::vector<double>& steps) {
-  SubbandCurve curve;
-  const size_t welded = multiplicity.size();
+  const size_t welded = multiplicity.size(), count = steps.size();
   const bool temporal = content.flags & format::kFlagTemporalResiduals;
   const bool spatial = content.flags & format::kFlagSpatialResiduals;
-  std::vector<double> previous(welded), current(welded);
-  std::vector<int64_t> previous_symbol(welded), current_symbol(welded);
-  for (double step : steps) {
-    const double q = double(float(step));  // the stream stores steps as float
-    double distortion = 0;
-    EntropyCounter entropy;
-    size_t frame = 0;
-    for (uint32_t frames : content.clip_frames) {
-      std::fill(previous.begin(), previous.end(), 0.0);
-      std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
-      for (uint32_t f = 0; f < frames; ++f, ++frame) {
-        for (uint32_t v : traversal.order) {
-          const size_t index = (frame * welded + v) * 3 + size_t(axis);
-          const double p = predictions[index];
-          const double r = predicted_residual(traversal, v, 0, 1, current.data(), previous.data(), temporal, spatial);
-          const int64_t k = quantizer_index((double(targets[index]) - p - r) / q);
-          current[v] = r + double(k) * q;
-          const double error = double(float(p + current[v])) - double(targets[index]);
-          distortion += multiplicity[v] * error * error;
-          const int64_t magnitude = previous_symbol[v] < 0 ? -previous_symbol[v] : previous_symbol[v];
-          entropy.add(int(std::min<int64_t>(magnitude, 2)), k);
-          current_symbol[v] = k;
-        }
-        previous.swap(current);
-        previous_symbol.swap(current_symbol);
+  std::vector<double> q(count), distortion(count, 0.0), sum(count), r(count), zeros(count, 0.0);
+  std::vector<double> inverse_q(count);
+  for (size_t s = 0; s < count; ++s) {
+    q[s] = double(float(steps[s]));  // the stream stores steps as float
+    inverse_q[s] = 1.0 / q[s];
+  }
+  std::vector<double> previous(welded * count), current(welded * count), change(welded * count, 0.0);
+  std::vector<int32_t> previous_symbol(welded * count), current_symbol(welded * count);
+  std::vector<EntropyCounter> entropy(count);
+  std::vector<double> frame_prediction(welded), frame_target(welded), frame_weight(welded);
+  size_t frame = 0;
+  for (uint32_t frames : content.clip_frames) {
+    std::fill(previous.begin(), previous.end(), 0.0);
+    std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
+    for (uint32_t f = 0; f < frames; ++f, ++frame) {
+      // This frame's predictions and targets, by position in the traversal.
+      for (size_t v = 0; v < welded; ++v) {
+        const size_t index = (frame * welded + v) * 3 + size_t(axis);
+        frame_prediction[traversal.position[v]] = predictions[index];
+        frame_target[traversal.position[v]] = double(targets[index]);
+        frame_weight[traversal.position[v]] = multiplicity[v];
       }
+      for (size_t position = 0; position < welded; ++position) {
+        const double p = frame_prediction[position], target = frame_target[position], weight = frame_weight[position];
+        const uint32_t begin = traversal.earlier_offset[position], end = traversal.earlier_offset[position + 1];
+        const size_t at = position * count;
+        const double* last = temporal ? &previous[at] : zeros.data();  // the temporal prediction
+        for (size_t s = 0; s < count; ++s) r[s] = last[s];
+        if (spatial && end > begin) {
+          std::fill(sum.begin(), sum.end(), 0.0);
+          for (uint32_t j = begin; j < end; ++j) {
+            const double* c = &change[size_t(traversal.earlier[j]) * count];
+            for (size_t s = 0; s < count; ++s) sum[s] += c[s];
+          }
+          const double inverse_n = 1.0 / double(end - begin);
+          for (size_t s = 0; s < count; ++s) r[s] += sum[s] * inverse_n;
+        }
+        quantize_steps(count, p, target, weight, r.data(), q.data(), inverse_q.data(), last, &current[at], &change[at],
+                       &current_symbol[at], distortion.data());
+        for (size_t s = 0; s < count; ++s) {
+          const int32_t before = previous_symbol[at + s], magnitude = before < 0 ? -before : before;
+          entropy[s].add(std::min(magnitude, 2), current_symbol[at + s]);
+        }
+      }
+      previous.swap(current);
+      previous_symbol.swap(current_symbol);
     }
-    curve.step.push_back(q);
-    curve.distortion.push_back(distortion);
-    curve.bits.push_back(entropy.bits());
+  }
+  SubbandCurve curve;
+  for (size_t s = 0; s < count; ++s) {
+    curve.step.push_back(q[s]);
+    curve.distortion.push_back(distortion[s]);
+    curve.bits.push_back(entropy[s].bits());
   }
   return curve;
 }

@@ -1,7 +1,9 @@
 #include "reconstruction.h"
 
+#include <algorithm>
 #include <queue>
 
+#include "stream_format.h"
 #include "topology.h"
 
 namespace segmorph {
@@ -36,11 +38,12 @@ ResidualTraversal residual_traversal(const StreamContent& content, const std::ve
     }
   }
   traversal.earlier_offset.assign(1, 0);
-  for (uint32_t v = 0; v < content.welded_count; ++v) {
+  for (uint32_t v : traversal.order) {
     for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i)
-      if (position[adjacency.neighbour[i]] < position[v]) traversal.earlier.push_back(adjacency.neighbour[i]);
+      if (position[adjacency.neighbour[i]] < position[v]) traversal.earlier.push_back(position[adjacency.neighbour[i]]);
     traversal.earlier_offset.push_back(uint32_t(traversal.earlier.size()));
   }
+  traversal.position = std::move(position);
   return traversal;
 }
 
@@ -85,7 +88,8 @@ ClusterWeights dequantized_weights(const StreamContent& content) {
   for (size_t w = 0; w < content.welded_count; ++w) {
     // The own cluster first, with what the extra clusters leave of 1.
     int64_t extra_sum = 0;
-    for (uint32_t i = content.weight_offset[w]; i < content.weight_offset[w + 1]; ++i) extra_sum += content.weight_value[i];
+    for (uint32_t i = content.weight_offset[w]; i < content.weight_offset[w + 1]; ++i)
+      extra_sum += content.weight_value[i];
     weights.cluster.push_back(content.labels[w]);
     weights.weight.push_back(double((int64_t(1) << content.weight_bits) - extra_sum) * unit);
     for (uint32_t i = content.weight_offset[w]; i < content.weight_offset[w + 1]; ++i) {
@@ -102,16 +106,43 @@ std::vector<double> predicted_frames(const StreamContent& content, const std::ve
   const ClusterWeights weights = dequantized_weights(content);
   const size_t row = size_t(content.welded_count) * 3;
   std::vector<double> predictions(content.frame_count() * row);
-  for (size_t f = 0; f < content.frame_count(); ++f) predict_frame(welded.data(), motion, weights, f, &predictions[f * row]);
+  for (size_t f = 0; f < content.frame_count(); ++f)
+    predict_frame(welded.data(), motion, weights, f, &predictions[f * row]);
   return predictions;
+}
+
+ResidualReconstructor::ResidualReconstructor(const StreamContent& content, const ResidualTraversal& traversal)
+    : traversal_(traversal),
+      lossless_(content.flags & format::kFlagLossless),
+      temporal_(content.flags & format::kFlagTemporalResiduals),
+      spatial_(content.flags & format::kFlagSpatialResiduals),
+      steps_{double(content.residual_step[0]), double(content.residual_step[1]), double(content.residual_step[2])},
+      previous_(traversal.order.size() * 3, 0.0),
+      current_(traversal.order.size() * 3, 0.0),
+      change_(traversal.order.size() * 3, 0.0) {}
+
+void ResidualReconstructor::start_clip() {
+  std::fill(previous_.begin(), previous_.end(), 0.0);
 }
 
 std::vector<float> reconstruct_welded(const StreamContent& content, const ResidualTraversal& traversal,
                                       const std::vector<double>& predictions) {
+  const size_t row = size_t(content.welded_count) * 3;
   std::vector<float> frames(predictions.size());
-  residual_loop(
-      content, traversal, predictions, [&](size_t index, double, double) { return content.residuals[index]; },
-      [&](size_t index, float x) { frames[index] = x; });
+  std::vector<int64_t> symbols(row);
+  ResidualReconstructor reconstructor(content, traversal);
+  size_t frame = 0;
+  for (uint32_t frames_in_clip : content.clip_frames) {
+    reconstructor.start_clip();
+    for (uint32_t f = 0; f < frames_in_clip; ++f, ++frame) {
+      // The frame's symbols, read front to back first (the traversal's order is not memory order).
+      std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, symbols.begin());
+      float* out = &frames[frame * row];
+      reconstructor.frame(
+          &predictions[frame * row], [&](size_t i, double, double) { return symbols[i]; },
+          [&](size_t i, float x) { out[i] = x; });
+    }
+  }
   return frames;
 }
 

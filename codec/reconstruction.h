@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "frame_sequence.h"
 #include "motion.h"
 #include "stream.h"
 
@@ -25,49 +26,63 @@ std::vector<double> predicted_frames(const StreamContent& content, const std::ve
 // The order in which a frame's welded vertices are reconstructed, and for each vertex its neighbours that come
 // before it in that order (the ones a spatial prediction may use). The order is breadth-first from the
 // lowest-numbered vertex of each connected piece, neighbours in ascending index; the mesh is the base mesh's
-// triangles (V indices) through the welding, triangles with two equal welded corners left out.
+// triangles (V indices) through the welding, triangles with two equal welded corners left out. Everything is
+// indexed by position in the order, so that a loop in that order walks its arrays front to back.
 struct ResidualTraversal {
-  std::vector<uint32_t> order;            // W
-  std::vector<uint32_t> earlier_offset;   // W + 1, indexed by welded vertex
-  std::vector<uint32_t> earlier;          // neighbours earlier in the order
+  std::vector<uint32_t> order;           // W: the welded vertex at each position
+  std::vector<uint32_t> position;        // W: the position of each welded vertex
+  std::vector<uint32_t> earlier_offset;  // W + 1, by position
+  std::vector<uint32_t> earlier;         // positions of the earlier neighbours, by ascending welded index
 };
 ResidualTraversal residual_traversal(const StreamContent& content, const std::vector<uint32_t>& triangles);
 
-// Quantizer index of a residual: the nearest integer, halves away from zero (llround's rule, inlined: this runs
-// for every coordinate of every frame at every candidate step of the rate control).
-inline int64_t quantizer_index(double residual_over_step) {
-  return int64_t(residual_over_step + (residual_over_step >= 0 ? 0.5 : -0.5));
+// Quantizer index of a residual (an encoder's choice; the decoder only reads indices): the nearest integer to
+// residual × (1 / step), halves away from zero (llround's rule, inlined: this runs for every coordinate of every
+// frame at every candidate step of the rate control). The encoder's residual loop and its rate control both
+// use it, so that the distortion the rate control measures is the one the stream has.
+inline int64_t quantizer_index(double residual_times_inverse_step) {
+  const double x = residual_times_inverse_step;
+  return int64_t(x + (x >= 0 ? 0.5 : -0.5));
 }
 
-// The predicted residual of vertex v, coordinate `axis`, from the reconstructed residuals of the current frame
-// so far and of the previous frame (arrays of W × stride values; coordinate a of vertex u at u · stride + a).
-inline double predicted_residual(const ResidualTraversal& traversal, uint32_t v, size_t axis, size_t stride,
-                                 const double* current, const double* previous, bool temporal, bool spatial) {
-  double r = temporal ? previous[v * stride + axis] : 0.0;
-  const uint32_t begin = traversal.earlier_offset[v], end = traversal.earlier_offset[v + 1];
-  if (spatial && end > begin) {
-    double sum = 0;
-    for (uint32_t j = begin; j < end; ++j) {
-      const size_t u = size_t(traversal.earlier[j]) * stride + axis;
-      sum += temporal ? current[u] - previous[u] : current[u];
-    }
-    r += sum / double(end - begin);
-  }
-  return r;
-}
-
-// The residual loop shared by encoder and decoder. For each clip, frame, welded vertex and axis in that
-// order (vertices in traversal order), with p the prediction and r the predicted residual: the previous
-// frame's reconstructed residual of the same vertex and axis when temporal residuals are on (0 at a clip's
-// first frame), plus, when spatial residuals are on, the mean over the vertex's earlier neighbours of their
-// reconstructed residual in this frame minus (temporal) their previous one:
+// The residual loop shared by encoder and decoder, one frame at a time. For each welded vertex in traversal
+// order and each axis, with p the prediction and r the predicted residual: the previous frame's reconstructed
+// residual of the same vertex and axis when temporal residuals are on (0.0 at a clip's first frame, and always
+// when they are off), plus, when spatial residuals are on and the vertex has n > 0 earlier neighbours, their
+// mean: (Σ_j c_j) × (1 / n), the sum in the order of `earlier`, c_j the neighbour's reconstructed residual in
+// this frame minus (temporal) its previous one:
 //   lossy:    x = float(p + (r + k · step[axis]))          and the new r is r + k · step[axis]
 //   lossless: x = from_ordered_bits(ordered_bits(float(p + r)) + k)   and the new r is x − p
-// `symbol(index, p, r)` returns k for the symbol at `index` (the encoder computes it from its target, the
-// decoder reads it); `output(index, x)` receives each reconstructed coordinate.
-template <typename Symbol, typename Output>
-void residual_loop(const StreamContent& content, const ResidualTraversal& traversal,
-                   const std::vector<double>& predictions, Symbol symbol, Output output);
+class ResidualReconstructor {
+ public:
+  // content: its flags and residual steps; both arguments must outlive the reconstructor.
+  ResidualReconstructor(const StreamContent& content, const ResidualTraversal& traversal);
+
+  // Starts a clip: the previous frame's residuals are 0.
+  void start_clip();
+
+  // Reconstructs the next frame of the clip. predictions: W × 3 (vertex v, axis a at v · 3 + a).
+  // `symbol(i, p, r)` returns k for coordinate i = v · 3 + a (the encoder computes it from its target, the
+  // decoder reads it); `output(i, x)` receives the reconstructed coordinate.
+  template <typename Symbol, typename Output>
+  void frame(const double* predictions, Symbol symbol, Output output);
+
+ private:
+  template <bool kLossless, bool kTemporal, bool kSpatial, typename Symbol, typename Output>
+  void frame_with(const double* predictions, Symbol symbol, Output output);
+
+  const ResidualTraversal& traversal_;
+  bool lossless_, temporal_, spatial_;
+  double steps_[3];
+  // By position in the traversal (W × 3). change: what a later neighbour's spatial prediction reads of a
+  // reconstructed residual (c_j above), computed once per vertex.
+  std::vector<double> previous_, current_, change_;
+};
+
+// The clips (original vertex order) of a content read by read_stream against `base`, with the base mesh's
+// triangles (the decoder's stage after entropy decoding). Fails when a position decodes to NaN or infinity.
+Status reconstruct_clips(const StreamContent& content, const std::vector<float>& base,
+                         const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips);
 
 // Frames (welded, F × W × 3 floats) of a complete content.
 std::vector<float> reconstruct_welded(const StreamContent& content, const ResidualTraversal& traversal,

@@ -66,7 +66,8 @@ MorseBands refine_levels(const std::vector<double>& mu, const std::vector<double
         const double from = levels[j] - settings.window * (levels[j] - below);
         const double to = levels[j] + settings.window * (above - levels[j]);
         double best = levels[j];
-        double best_score = concavity(best, members[c], mu, curvature, adjacency, settings.smoothing, slot, boundary, profile);
+        double best_score =
+            concavity(best, members[c], mu, curvature, adjacency, settings.smoothing, slot, boundary, profile);
         for (int k = 0; k < settings.candidates; ++k) {
           const double candidate = from + (to - from) * k / std::max(settings.candidates - 1, 1);
           const double score =

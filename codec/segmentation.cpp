@@ -1,11 +1,10 @@
 #include "segmentation.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <numeric>
-
-#include <Eigen/Dense>
 
 namespace segmorph {
 namespace {
@@ -51,7 +50,7 @@ std::vector<size_t> pieces_per_band(const std::vector<uint32_t>& vertices, const
 struct FitStatistics {
   Eigen::Matrix4d gram = Eigen::Matrix4d::Zero();
   std::vector<Eigen::Matrix<double, 4, 3>> moments;  // F
-  std::vector<double> energy;                         // F
+  std::vector<double> energy;                        // F
   size_t size = 0;
 
   double residual() const {
@@ -89,7 +88,8 @@ Clusters compact(const std::vector<uint32_t>& label) {
 }  // namespace
 
 Clusters clusters_from_levels(const std::vector<double>& mu, const WeldedTopology& topology,
-                              const VertexAdjacency& adjacency, const MorseBands& bands, const MorseSettings& settings) {
+                              const VertexAdjacency& adjacency, const MorseBands& bands,
+                              const MorseSettings& settings) {
   const size_t vertex_count = topology.welded_count();
   std::vector<uint32_t> band(vertex_count);
   for (size_t w = 0; w < vertex_count; ++w) band[w] = uint32_t(band_of(mu[w], bands.levels[topology.component[w]]));
@@ -101,8 +101,8 @@ Clusters clusters_from_levels(const std::vector<double>& mu, const WeldedTopolog
   for (size_t w = 0; w < vertex_count; ++w) label[w] = pieces.find(uint32_t(w));
 
   // Small pieces join the neighbouring piece they share the most edges with, smallest first.
-  const size_t min_size = std::max(size_t(settings.min_cluster_size),
-                                   size_t(std::ceil(settings.min_cluster_share * double(vertex_count))));
+  const size_t min_size =
+      std::max(size_t(settings.min_cluster_size), size_t(std::ceil(settings.min_cluster_share * double(vertex_count))));
   for (bool changed = true; changed;) {
     changed = false;
     std::vector<size_t> size(vertex_count, 0);
@@ -110,7 +110,8 @@ Clusters clusters_from_levels(const std::vector<double>& mu, const WeldedTopolog
     std::vector<uint32_t> order;
     for (size_t w = 0; w < vertex_count; ++w)
       if (label[w] == w && size[w] < min_size) order.push_back(uint32_t(w));
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return size[a] != size[b] ? size[a] < size[b] : a < b; });
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t a, uint32_t b) { return size[a] != size[b] ? size[a] < size[b] : a < b; });
     for (uint32_t piece : order) {
       std::vector<std::pair<uint32_t, size_t>> shared;  // neighbouring piece, shared edges
       for (size_t w = 0; w < vertex_count; ++w) {
@@ -119,8 +120,10 @@ Clusters clusters_from_levels(const std::vector<double>& mu, const WeldedTopolog
           const uint32_t other = label[adjacency.neighbour[i]];
           if (other == piece) continue;
           auto it = std::find_if(shared.begin(), shared.end(), [&](const auto& s) { return s.first == other; });
-          if (it == shared.end()) shared.push_back({other, 1});
-          else ++it->second;
+          if (it == shared.end())
+            shared.push_back({other, 1});
+          else
+            ++it->second;
         }
       }
       if (shared.empty()) continue;  // a small component of its own: left to merge_clusters
@@ -165,8 +168,10 @@ Clusters morse_segmentation(const std::vector<double>& mu, const WeldedTopology&
       const std::vector<size_t> count = pieces_per_band(vertices, mu, adjacency, levels, band, pieces);
       std::vector<double> kept;
       for (size_t j = 0; j < levels.size(); ++j) {
-        if (count[j] == count[j + 1]) merged = true;  // the level between bands j and j+1 goes
-        else kept.push_back(levels[j]);
+        if (count[j] == count[j + 1])
+          merged = true;  // the level between bands j and j+1 goes
+        else
+          kept.push_back(levels[j]);
       }
       levels.swap(kept);
     }
@@ -214,7 +219,9 @@ Clusters merge_clusters(const Clusters& clusters, size_t target, const float* ba
   std::vector<bool> alive(clusters.count, true);
   std::vector<uint32_t> into(clusters.count);
   std::iota(into.begin(), into.end(), 0u);
-  auto isolated = [&](size_t a) { return std::none_of(touching[a].begin(), touching[a].end(), [](bool t) { return t; }); };
+  auto isolated = [&](size_t a) {
+    return std::none_of(touching[a].begin(), touching[a].end(), [](bool t) { return t; });
+  };
   // Cost of merging a and b (the increase of the residual), cached; NaN where they may not merge.
   auto merge_cost = [&](size_t a, size_t b) -> double {
     if (!touching[a][b] && !isolated(a) && !isolated(b)) return NAN;

@@ -14,7 +14,7 @@
 namespace segmorph {
 
 struct MorseSettings {
-  int intervals = 24;           // initial intervals per connected component, each holding an equal share of its vertices
+  int intervals = 24;  // initial intervals per connected component, each holding an equal share of its vertices
   double min_cluster_share = 0.004;  // pieces smaller than this share of the vertices (and than min_cluster_size)
   int min_cluster_size = 12;         //   join the neighbouring cluster they share most edges with
 };
@@ -27,7 +27,8 @@ struct MorseBands {
 
 // Segments the welded mesh by μ (W values). Components of the mesh are segmented separately.
 Clusters morse_segmentation(const std::vector<double>& mu, const WeldedTopology& topology,
-                            const VertexAdjacency& adjacency, const MorseSettings& settings, MorseBands* bands = nullptr);
+                            const VertexAdjacency& adjacency, const MorseSettings& settings,
+                            MorseBands* bands = nullptr);
 
 // The clusters implied by band levels: per component, vertex w falls in band b when
 // levels[b-1] <= μ(w) < levels[b]; clusters are the connected pieces of each band, small pieces merged.

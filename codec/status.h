@@ -34,9 +34,9 @@ class Status {
 };
 
 // Returns early from the enclosing function when `expr` yields a failed Status.
-#define SEGMORPH_RETURN_IF_ERROR(expr)         \
-  do {                                         \
-    ::segmorph::Status segmorph_status_ = (expr); \
+#define SEGMORPH_RETURN_IF_ERROR(expr)                   \
+  do {                                                   \
+    ::segmorph::Status segmorph_status_ = (expr);        \
     if (!segmorph_status_.ok()) return segmorph_status_; \
   } while (0)
 

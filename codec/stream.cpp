@@ -32,11 +32,11 @@ float bits_float(uint32_t bits) {
 
 // The adaptive contexts of a stream, in one place so that writer and reader cannot disagree.
 struct Models {
-  UnsignedModel count;                  // header counts
-  BitModel group_welded;                // a group of identical base positions is one welded vertex
-  UnsignedModel group_member;           // else: earlier member each member equals, or "new"
-  std::array<SignedModel, 12> motion;   // per coefficient slot, deltas from the previous frame
-  BitTreeModel extra_count{2};          // extra clusters per vertex (0..3)
+  UnsignedModel count;                 // header counts
+  BitModel group_welded;               // a group of identical base positions is one welded vertex
+  UnsignedModel group_member;          // else: earlier member each member equals, or "new"
+  std::array<SignedModel, 12> motion;  // per coefficient slot, deltas from the previous frame
+  BitTreeModel extra_count{2};         // extra clusters per vertex (0..3)
   SignedModel weight;
   // Residuals by axis and by the magnitude of the same vertex's symbol in the previous frame (0, 1, more).
   std::array<SignedModel, 9> residual;
@@ -182,13 +182,15 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
     return Status(StatusCode::bad_data, "not a segmorph animation stream (bad magic)");
   if (data[4] != format::kVersion)
     return Status(StatusCode::unsupported, "animation stream version " + std::to_string(data[4]) +
-                                               " (this decoder reads version " + std::to_string(format::kVersion) + ")");
+                                               " (this decoder reads version " + std::to_string(format::kVersion) +
+                                               ")");
   content.flags = data[5];
   if (content.flags & ~format::kKnownFlags) return Status(StatusCode::bad_data, "animation stream has unknown flags");
-  const uint32_t length = uint32_t(data[6]) | uint32_t(data[7]) << 8 | uint32_t(data[8]) << 16 | uint32_t(data[9]) << 24;
+  const uint32_t length =
+      uint32_t(data[6]) | uint32_t(data[7]) << 8 | uint32_t(data[8]) << 16 | uint32_t(data[9]) << 24;
   if (length != size - format::kHeaderBytes)
     return Status(StatusCode::bad_data, length > size - format::kHeaderBytes ? "animation stream is truncated"
-                                                                            : "animation stream has trailing bytes");
+                                                                             : "animation stream has trailing bytes");
   RangeDecoder decoder(data + format::kHeaderBytes, size - format::kHeaderBytes);
   Models models;
   auto corrupt = [](const std::string& what) { return Status(StatusCode::bad_data, "animation stream: " + what); };
@@ -252,8 +254,8 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
     for (size_t k = 0; k < clusters; ++k)
       for (size_t c = 0; c < 12; ++c) {
         const size_t index = (f * clusters + k) * 12 + c;
-        const int64_t value = int64_t(f == 0 ? 0 : content.motion[index - clusters * 12]) +
-                              models.motion[c].decode(decoder);
+        const int64_t value =
+            int64_t(f == 0 ? 0 : content.motion[index - clusters * 12]) + models.motion[c].decode(decoder);
         if (value < INT32_MIN || value > INT32_MAX) return corrupt("motion coefficient out of range");
         content.motion[index] = int32_t(value);
       }

@@ -10,16 +10,16 @@
 namespace segmorph {
 
 struct StreamContent {
-  uint8_t flags = 0;                   // format::kFlag*
-  uint32_t vertex_count = 0;           // V, must equal the base mesh's
+  uint8_t flags = 0;          // format::kFlag*
+  uint32_t vertex_count = 0;  // V, must equal the base mesh's
   // Welding: vertices with bit-identical base positions form groups (the decoder finds them itself); a group
   // is usually one welded vertex, else its partition is coded. welded_index: V, numbered in order of first
   // vertex; welded_count: W.
   std::vector<uint32_t> welded_index;
   uint32_t welded_count = 0;
-  std::vector<uint32_t> clip_frames;   // frames per clip; F = their sum
-  uint32_t cluster_count = 0;          // K
-  std::vector<uint32_t> labels;        // W: cluster of each welded vertex
+  std::vector<uint32_t> clip_frames;  // frames per clip; F = their sum
+  uint32_t cluster_count = 0;         // K
+  std::vector<uint32_t> labels;       // W: cluster of each welded vertex
   // Motion: per frame and cluster, 12 integers: the 9 entries of L − I in units of linear_step, then the 3 of
   // t − c (c the cluster's base centroid) in units of translation_step. F × K × 12.
   float linear_step = 0, translation_step = 0;
@@ -40,7 +40,7 @@ struct StreamContent {
 
 // Byte offsets of the parts of an encoded stream, for reports.
 struct StreamSizes {
-  size_t motion = 0;     // header, welding, labels, motion, weights
+  size_t motion = 0;  // header, welding, labels, motion, weights
   size_t residuals = 0;
 };
 

@@ -12,16 +12,16 @@ constexpr uint8_t kVersion = 1;
 constexpr size_t kHeaderBytes = 10;  // magic, version, flags, body length (u32, little endian); the body follows
 
 // Flags byte.
-constexpr uint8_t kFlagLossless = 1 << 0;            // residuals code float bit patterns exactly
-constexpr uint8_t kFlagTemporalResiduals = 1 << 1;   // residuals are predicted from the previous frame's
-constexpr uint8_t kFlagSpatialResiduals = 1 << 2;    // residuals are predicted from already decoded neighbours
+constexpr uint8_t kFlagLossless = 1 << 0;           // residuals code float bit patterns exactly
+constexpr uint8_t kFlagTemporalResiduals = 1 << 1;  // residuals are predicted from the previous frame's
+constexpr uint8_t kFlagSpatialResiduals = 1 << 2;   // residuals are predicted from already decoded neighbours
 constexpr uint8_t kKnownFlags = kFlagLossless | kFlagTemporalResiduals | kFlagSpatialResiduals;
 
 // Limits a decoder enforces before allocating (a stream claiming more is refused as bad data).
 constexpr uint32_t kMaxClips = 4096;
 constexpr uint64_t kMaxVertexFrames = uint64_t(1) << 28;  // W × F: 268 million positions, 3 GiB of floats
 constexpr uint32_t kMaxClusters = 65535;
-constexpr uint32_t kMaxExtraWeights = 3;       // clusters blended into a vertex besides its own
-constexpr int kMaxWeightBits = 16;            // weights are multiples of 2^-bits
+constexpr uint32_t kMaxExtraWeights = 3;  // clusters blended into a vertex besides its own
+constexpr int kMaxWeightBits = 16;        // weights are multiples of 2^-bits
 
 }  // namespace segmorph::format

@@ -58,9 +58,8 @@ WeldedTopology weld_topology(const std::vector<FrameSequence>& clips) {
 
   std::vector<uint32_t> order(vertex_count);
   std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    return hash[a] != hash[b] ? hash[a] < hash[b] : a < b;
-  });
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return hash[a] != hash[b] ? hash[a] < hash[b] : a < b; });
 
   // Within a run of equal hashes, each vertex joins the first earlier vertex with the same trajectory.
   // The first original vertex of each group becomes its representative.

@@ -32,7 +32,7 @@ struct WeldedTopology {
 // Edge adjacency of the welded vertices in compressed-row form: the neighbours of w are
 // neighbour[offset[w] .. offset[w + 1]), sorted ascending.
 struct VertexAdjacency {
-  std::vector<uint32_t> offset;     // W + 1
+  std::vector<uint32_t> offset;  // W + 1
   std::vector<uint32_t> neighbour;
 };
 VertexAdjacency vertex_adjacency(const WeldedTopology& topology);
