@@ -195,45 +195,40 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   std::vector<double> predictions;
   StepChoice choice;
   SubbandCurve curves[3];
-  // Measures more candidate steps of one subband (those not measured yet) and adds them to its curve.
-  auto extend = [&](int axis, const std::vector<double>& candidates) {
-    SubbandCurve& curve = curves[axis];
-    std::vector<double> steps;
-    for (double step : candidates)
-      if (std::find(curve.step.begin(), curve.step.end(), double(float(step))) == curve.step.end())
-        steps.push_back(step);
-    if (steps.empty()) return;
-    const SubbandCurve more =
-        measure_subband(content, traversal, predictions, trajectories.positions, multiplicity, axis, steps);
-    curve.step.insert(curve.step.end(), more.step.begin(), more.step.end());
-    curve.distortion.insert(curve.distortion.end(), more.distortion.begin(), more.distortion.end());
-    curve.bits.insert(curve.bits.end(), more.bits.begin(), more.bits.end());
+  // Measures more candidate steps of the subbands (those not measured yet; candidates[axis]) and adds them to
+  // their curves, all in one walk.
+  auto extend = [&](const std::vector<double>(&candidates)[3]) {
+    std::vector<double> steps[3];
+    for (int axis = 0; axis < 3; ++axis)
+      for (double step : candidates[axis])
+        if (std::find(curves[axis].step.begin(), curves[axis].step.end(), double(float(step))) ==
+                curves[axis].step.end() &&
+            std::find(steps[axis].begin(), steps[axis].end(), step) == steps[axis].end())
+          steps[axis].push_back(step);
+    measure_subbands(content, traversal, predictions, trajectories.positions, multiplicity, steps, curves);
   };
-  // Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1..±3), after
+  // Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1, ±2), after
   // widening the range while a choice sits on its edge (very low or very high targets).
   auto refine = [&](StepChoice& choice_, auto choose_) {
     for (int widen = 0; widen < 6; ++widen) {
-      bool widened = false;
+      std::vector<double> beyond[3];
       for (int axis = 0; axis < 3; ++axis) {
         const std::vector<double>& measured = curves[axis].step;
         const double chosen = measured[choice_.index[axis]];
         const bool top = chosen == *std::max_element(measured.begin(), measured.end());
         const bool bottom = chosen == *std::min_element(measured.begin(), measured.end());
         if (!top && !bottom) continue;
-        std::vector<double> beyond;
-        for (int j = 1; j <= 4; ++j) beyond.push_back(chosen * std::exp2(top ? j : -j));
-        extend(axis, beyond);
-        widened = true;
+        for (int j = 1; j <= 4; ++j) beyond[axis].push_back(chosen * std::exp2(top ? j : -j));
       }
-      if (!widened) break;
+      if (beyond[0].empty() && beyond[1].empty() && beyond[2].empty()) break;
+      extend(beyond);
       choice_ = choose_();
     }
-    for (int axis = 0; axis < 3; ++axis) {
-      std::vector<double> fine;
-      for (int j = -3; j <= 3; ++j)
-        if (j != 0) fine.push_back(curves[axis].step[choice_.index[axis]] * std::exp2(j / 4.0));
-      extend(axis, fine);
-    }
+    std::vector<double> fine[3];
+    for (int axis = 0; axis < 3; ++axis)
+      for (int j = -2; j <= 2; ++j)
+        if (j != 0) fine[axis].push_back(curves[axis].step[choice_.index[axis]] * std::exp2(j / 4.0));
+    extend(fine);
     choice_ = choose_();
   };
   // Quantized motion and weights for a motion step (translation step; the linear step is it over the RMS
@@ -274,12 +269,12 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
       residual_budget = std::max(0.0, settings.target * double(vertex_count) * double(frames_total) -
                                           8.0 * double(side_bytes() + settings.outside_bytes));
     if (fresh) {
-      std::vector<double> coarse;
-      for (int j = -3; j <= 3; ++j) coarse.push_back(mean_step * std::exp2(j));
+      std::vector<double> coarse[3];
       for (int axis = 0; axis < 3; ++axis) {
         curves[axis] = SubbandCurve();
-        extend(axis, coarse);
+        for (int j = -2; j <= 2; ++j) coarse[axis].push_back(mean_step * std::exp2(j));
       }
+      extend(coarse);
     }
     choice = choose();
     refine(choice, choose);
@@ -312,12 +307,13 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     for (double ratio : kMotionStepRatioTrials) {
       prepare_motion(ratio * guess);
       const auto begin = Clock::now();
+      std::vector<double> near[3];
       for (int axis = 0; axis < 3; ++axis) {
         curves[axis] = SubbandCurve();
-        std::vector<double> near;
-        for (int j = -1; j <= 1; ++j) near.push_back(first_curves[axis].step[first.index[axis]] * std::exp2(j / 4.0));
-        extend(axis, near);
+        for (int j = -1; j <= 1; ++j)
+          near[axis].push_back(first_curves[axis].step[first.index[axis]] * std::exp2(j / 4.0));
       }
+      extend(near);
       const StepChoice trial = choose();
       report.ms_rate_control += milliseconds_since(begin);
       const double bytes = double(side_bytes()) + trial.bits / 8;
@@ -328,7 +324,11 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     }
     prepare_motion(best_ratio * guess);
     for (int axis = 0; axis < 3; ++axis) curves[axis] = best_curves[axis];
-    residual_rate_control(false);
+    if (best_ratio == kMotionStepRatio)
+      choice = first;  // already refined
+    else
+      residual_rate_control(false);
+    for (int axis = 0; axis < 3; ++axis) content.residual_step[axis] = float(curves[axis].step[choice.index[axis]]);
   }
 
   // Residual symbols by the decoder's own loop, then the stream.

@@ -50,65 +50,81 @@ std::vector<double> candidate_steps(double around) {
   return steps;
 }
 
+namespace {
+
 constexpr double kIndexLimit = 1 << 30;
 
-// One vertex and coordinate at `count` steps: the residual quantized as the encoder does (quantizer_index, in a
-// form the compiler vectorizes: indices are clamped to ±2^30, which only a step far too small to ever be chosen
-// reaches), the reconstructed residual, its change from `last` and the distortion of the reconstructed position.
-void quantize_steps(size_t count, double p, double target, double weight, const double* __restrict r,
-                    const double* __restrict q, const double* __restrict inverse_q, const double* __restrict last,
-                    double* __restrict current, double* __restrict change, int32_t* __restrict symbol,
-                    double* __restrict distortion) {
+// One vertex at `count` lanes (an axis and a step each): the residual quantized as the encoder does
+// (quantizer_index, in a form the compiler vectorizes: indices are clamped to ±2^30, which only a step far too
+// small to ever be chosen reaches), the reconstructed residual, its change from `last` and the distortion of
+// the reconstructed position.
+void quantize_lanes(size_t count, double weight, const double* __restrict p, const double* __restrict target,
+                    const double* __restrict r, const double* __restrict q, const double* __restrict inverse_q,
+                    const double* __restrict last, double* __restrict current, double* __restrict change,
+                    int32_t* __restrict symbol, double* __restrict distortion) {
   for (size_t s = 0; s < count; ++s) {
-    double x = (target - p - r[s]) * inverse_q[s];
+    double x = (target[s] - p[s] - r[s]) * inverse_q[s];
     x = std::min(std::max(x + std::copysign(0.5, x), -kIndexLimit), kIndexLimit);
     const int32_t k = int32_t(x);
     const double reconstructed = r[s] + double(k) * q[s];
     current[s] = reconstructed;
     change[s] = reconstructed - last[s];
-    const double error = double(float(p + reconstructed)) - target;
+    const double error = double(float(p[s] + reconstructed)) - target[s];
     distortion[s] += weight * error * error;
     symbol[s] = k;
   }
 }
 
-// The steps are measured together, in one walk over the frames: every array below holds, per welded vertex, one
-// value per step side by side (vertex v, step s at v · S + s). The steps' loops are independent, so the
-// processor overlaps them instead of waiting on one vertex's chain of dependent divisions at a time; each step
-// still sees exactly the arithmetic of the decoder's loop, in the same order. Arrays are by position in the
-// traversal, so the walk reads them front to back and a vertex's earlier neighbours are mostly close behind.
-SubbandCurve measure_subband(const StreamContent& content, const ResidualTraversal& traversal,
-                             const std::vector<double>& predictions, const std::vector<float>& targets,
-                             const std::vector<uint32_t>& multiplicity, int axis, const std::vector<double>& steps) {
-  const size_t welded = multiplicity.size(), count = steps.size();
+}  // namespace
+
+// The subbands and steps are measured together, in one walk over the frames: every array below holds, per
+// welded vertex, one value per lane (an axis and a candidate step) side by side (position i, lane s at
+// i · S + s). The lanes' loops are independent, so the processor overlaps them instead of waiting on one
+// vertex's chain of dependent operations at a time; each lane still sees exactly the arithmetic of the
+// decoder's loop, in the same order. Arrays are by position in the traversal, so the walk reads them front to
+// back and a vertex's earlier neighbours are mostly close behind.
+void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
+                      const std::vector<double>& predictions, const std::vector<float>& targets,
+                      const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
+                      SubbandCurve (&curves)[3]) {
+  const size_t welded = multiplicity.size();
   const bool temporal = content.flags & format::kFlagTemporalResiduals;
   const bool spatial = content.flags & format::kFlagSpatialResiduals;
-  std::vector<double> q(count), distortion(count, 0.0), sum(count), r(count), zeros(count, 0.0);
-  std::vector<double> inverse_q(count);
-  for (size_t s = 0; s < count; ++s) {
-    q[s] = double(float(steps[s]));  // the stream stores steps as float
-    inverse_q[s] = 1.0 / q[s];
-  }
+  std::vector<size_t> lane_axis;
+  std::vector<double> q, inverse_q;
+  for (int axis = 0; axis < 3; ++axis)
+    for (double step : steps[axis]) {
+      lane_axis.push_back(size_t(axis));
+      q.push_back(double(float(step)));  // the stream stores steps as float
+      inverse_q.push_back(1.0 / q.back());
+    }
+  const size_t count = q.size();
+  if (count == 0) return;
+  std::vector<double> distortion(count, 0.0), sum(count), r(count), zeros(count, 0.0), p(count), target(count);
   std::vector<double> previous(welded * count), current(welded * count), change(welded * count, 0.0);
   std::vector<int32_t> previous_symbol(welded * count), current_symbol(welded * count);
   std::vector<EntropyCounter> entropy(count);
-  std::vector<double> frame_prediction(welded), frame_target(welded), frame_weight(welded);
+  std::vector<double> frame_prediction(welded * 3), frame_target(welded * 3), frame_weight(welded);
+  for (size_t v = 0; v < welded; ++v) frame_weight[traversal.position[v]] = multiplicity[v];
   size_t frame = 0;
   for (uint32_t frames : content.clip_frames) {
     std::fill(previous.begin(), previous.end(), 0.0);
     std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
     for (uint32_t f = 0; f < frames; ++f, ++frame) {
       // This frame's predictions and targets, by position in the traversal.
-      for (size_t v = 0; v < welded; ++v) {
-        const size_t index = (frame * welded + v) * 3 + size_t(axis);
-        frame_prediction[traversal.position[v]] = predictions[index];
-        frame_target[traversal.position[v]] = double(targets[index]);
-        frame_weight[traversal.position[v]] = multiplicity[v];
-      }
+      for (size_t v = 0; v < welded; ++v)
+        for (size_t axis = 0; axis < 3; ++axis) {
+          const size_t index = (frame * welded + v) * 3 + axis;
+          frame_prediction[traversal.position[v] * 3 + axis] = predictions[index];
+          frame_target[traversal.position[v] * 3 + axis] = double(targets[index]);
+        }
       for (size_t position = 0; position < welded; ++position) {
-        const double p = frame_prediction[position], target = frame_target[position], weight = frame_weight[position];
         const uint32_t begin = traversal.earlier_offset[position], end = traversal.earlier_offset[position + 1];
         const size_t at = position * count;
+        for (size_t s = 0; s < count; ++s) {
+          p[s] = frame_prediction[position * 3 + lane_axis[s]];
+          target[s] = frame_target[position * 3 + lane_axis[s]];
+        }
         const double* last = temporal ? &previous[at] : zeros.data();  // the temporal prediction
         for (size_t s = 0; s < count; ++s) r[s] = last[s];
         if (spatial && end > begin) {
@@ -120,8 +136,8 @@ SubbandCurve measure_subband(const StreamContent& content, const ResidualTravers
           const double inverse_n = 1.0 / double(end - begin);
           for (size_t s = 0; s < count; ++s) r[s] += sum[s] * inverse_n;
         }
-        quantize_steps(count, p, target, weight, r.data(), q.data(), inverse_q.data(), last, &current[at], &change[at],
-                       &current_symbol[at], distortion.data());
+        quantize_lanes(count, frame_weight[position], p.data(), target.data(), r.data(), q.data(), inverse_q.data(),
+                       last, &current[at], &change[at], &current_symbol[at], distortion.data());
         for (size_t s = 0; s < count; ++s) {
           const int32_t before = previous_symbol[at + s], magnitude = before < 0 ? -before : before;
           entropy[s].add(std::min(magnitude, 2), current_symbol[at + s]);
@@ -131,13 +147,12 @@ SubbandCurve measure_subband(const StreamContent& content, const ResidualTravers
       previous_symbol.swap(current_symbol);
     }
   }
-  SubbandCurve curve;
   for (size_t s = 0; s < count; ++s) {
+    SubbandCurve& curve = curves[lane_axis[s]];
     curve.step.push_back(q[s]);
     curve.distortion.push_back(distortion[s]);
     curve.bits.push_back(entropy[s].bits());
   }
-  return curve;
 }
 
 StepChoice choose_steps(const SubbandCurve (&curves)[3], double lambda) {

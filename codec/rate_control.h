@@ -20,12 +20,13 @@ struct SubbandCurve {
 // Candidate steps: `around` × 2^(j/4) for j in [−24, 24].
 std::vector<double> candidate_steps(double around);
 
-// Closed-loop D(q) and R(q) of one axis for every step: the decoder's residual loop (reconstruction.h) for
-// that axis, with the content's flags and clips. predictions, targets: F × W × 3; multiplicity: W (original
-// vertices per welded vertex).
-SubbandCurve measure_subband(const StreamContent& content, const ResidualTraversal& traversal,
-                             const std::vector<double>& predictions, const std::vector<float>& targets,
-                             const std::vector<uint32_t>& multiplicity, int axis, const std::vector<double>& steps);
+// Closed-loop D(q) and R(q) of the three subbands at more candidate steps (steps[axis], any number each; the
+// measurements are appended to curves[axis]): the decoder's residual loop (reconstruction.h) with the content's
+// flags and clips. predictions, targets: F × W × 3; multiplicity: W (original vertices per welded vertex).
+void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
+                      const std::vector<double>& predictions, const std::vector<float>& targets,
+                      const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
+                      SubbandCurve (&curves)[3]);
 
 struct StepChoice {
   size_t index[3] = {0, 0, 0};  // into each curve
