@@ -23,9 +23,18 @@ double milliseconds_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// Automatic cluster count: the Morse segmentation's own count, capped so the motion side information stays a
-// small part of the stream (measured in docs/codec.md).
-constexpr size_t kMaxAutomaticClusters = 24;
+// Automatic cluster count (chosen by estimated size, docs/codec.md): the largest candidate is the segmentation's
+// own count, at most one cluster per kVerticesPerCluster welded vertices and kMaxClusters; the smallest is
+// kMinAutomaticClusters. Lossless streams, whose size the residuals dominate, use kLosslessClusters.
+constexpr size_t kVerticesPerCluster = 24;
+constexpr size_t kMaxClusters = 256;
+constexpr size_t kMinAutomaticClusters = 4;
+constexpr size_t kLosslessClusters = 24;
+// The frames the automatic K is estimated on: windows of kSampleWindow frames every kSampleStride frames (all
+// frames when there are at most twice kSampleStride), and the motion refinement iterations of each candidate.
+constexpr size_t kSampleWindow = 8;
+constexpr size_t kSampleStride = 32;
+constexpr int kSampleRefinements = 2;
 // Weights are multiples of 2^-8.
 constexpr int kWeightBits = 8;
 // Motion quantizer steps relative to the mean residual step: translation β q̄, linear β q̄ / (RMS radius).
@@ -83,6 +92,18 @@ void quantize_motion(const AffineMotion& fitted, double linear_step, double tran
         q[9 + r] = int32_t(std::llround((t[r * 4 + 3] - fitted.centroid[k * 3 + size_t(r)]) / translation));
       }
     }
+}
+
+// Root mean square distance of the base vertices from their cluster's centroid.
+double cluster_radius(const std::vector<float>& base_welded, const std::vector<double>& centroid,
+                      const std::vector<uint32_t>& labels) {
+  double sum = 0;
+  for (size_t w = 0; w < labels.size(); ++w)
+    for (int c = 0; c < 3; ++c) {
+      const double d = base_welded[w * 3 + size_t(c)] - centroid[labels[w] * 3 + size_t(c)];
+      sum += d * d;
+    }
+  return std::sqrt(sum / double(std::max<size_t>(labels.size(), 1))) + 1e-30;
 }
 
 void quantize_weights(const ClusterWeights& weights, StreamContent& content) {
@@ -164,8 +185,97 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
                                              bands, RefinementSettings(), &report.refinement_iterations);
     clusters = clusters_from_levels(morse.mu, topology, adjacency, refined, morse_settings);
   }
-  const size_t target_clusters = settings.clusters ? settings.clusters : kMaxAutomaticClusters;
-  clusters = merge_clusters(clusters, target_clusters, base_welded.data(), trajectories, adjacency);
+  // The scale of the residual steps: from the target error when there is one, else from the motion error.
+  const double spread = frame_spread(clips);
+  const double samples = 3.0 * double(vertex_count) * double(frames_total);
+  double mean_step = std::sqrt(12.0 * std::max(report.e_pi_before_refinement, 1e-12)) *
+                     bounding_box_diagonal(base.data(), vertex_count) * 0.1;
+  if (settings.mode == RateMode::error) mean_step = std::sqrt(12.0 * spread / samples) * settings.target / 100.0;
+
+  // The cost of a candidate segmentation for the automatic K, smaller is better: with an error target, the
+  // estimated stream bits at the target distortion; with a rate target, the estimated log distortion at the
+  // target size. It is measured on a sample of the frames (windows of kSampleWindow frames every
+  // kSampleStride, each coded as a clip of its own) so that the search costs about a quarter of one full pass:
+  // the clusters refined by motion (kSampleRefinements iterations), motion quantized as below at the expected
+  // step, weights fitted, then the closed-loop residual rate and distortion at two residual steps (the expected
+  // one and twice it, on every axis), interpolated in log distortion.
+  Trajectories sample;
+  sample.vertex_count = welded;
+  std::vector<uint32_t> sample_clip_frames;
+  {
+    const bool sampled = frames_total > 2 * kSampleStride;
+    size_t first = 0;  // of the clip, in the trajectories
+    for (const FrameSequence& clip : clips) {
+      const size_t stride = sampled ? kSampleStride : clip.frame_count;
+      for (size_t window = 0; window < clip.frame_count; window += stride) {
+        const size_t length = sampled ? std::min(clip.frame_count - window, kSampleWindow) : clip.frame_count;
+        const float* from = &trajectories.positions[(first + window) * welded * 3];
+        sample.positions.insert(sample.positions.end(), from, from + length * welded * 3);
+        sample.frame_count += length;
+        sample_clip_frames.push_back(uint32_t(length));
+      }
+      first += clip.frame_count;
+    }
+  }
+  const double sample_share = double(sample.frame_count) / double(frames_total);
+  const double max_distortion = std::pow(settings.target / 100.0, 2) * spread;
+  auto candidate_cost = [&](const Clusters& merged) {
+    const Clusters candidate = refine_by_motion(merged, base_welded.data(), sample, adjacency, kSampleRefinements);
+    StreamContent trial = content;
+    trial.clip_frames = sample_clip_frames;
+    trial.cluster_count = uint32_t(candidate.count);
+    trial.labels = candidate.label;
+    const AffineMotion motion = fit_affine_motion(base_welded.data(), sample, candidate);
+    const double motion_step = kMotionStepRatio * mean_step;
+    quantize_motion(motion, motion_step / cluster_radius(base_welded, motion.centroid, candidate.label), motion_step,
+                    trial);
+    quantize_weights(settings.blend_weights ? fit_cluster_weights(base_welded.data(), sample, candidate,
+                                                                  dequantized_motion(trial, base_welded),
+                                                                  adjacency.offset, adjacency.neighbour, 2, 4)
+                                            : own_cluster_weights(candidate),
+                     trial);
+    const std::vector<double> trial_predictions = predicted_frames(trial, base_welded);
+    const std::vector<double> steps = {mean_step, 2 * mean_step};
+    SubbandCurve measured[3];
+    measure_subbands(trial, traversal, trial_predictions, sample.positions, multiplicity, {steps, steps, steps},
+                     measured);
+    std::vector<uint8_t> side;
+    write_stream(trial, base, side);
+    double distortion[2], bits[2];
+    for (int j = 0; j < 2; ++j) {
+      distortion[j] =
+          std::max(measured[0].distortion[j] + measured[1].distortion[j] + measured[2].distortion[j], 1e-300);
+      bits[j] = 8.0 * double(side.size()) + measured[0].bits[j] + measured[1].bits[j] + measured[2].bits[j];
+    }
+    if (settings.mode == RateMode::error) {
+      const double t =
+          std::log(sample_share * max_distortion / distortion[0]) / std::log(distortion[1] / distortion[0]);
+      return bits[0] + t * (bits[1] - bits[0]);
+    }
+    const double budget = sample_share * (settings.target * double(vertex_count) * double(frames_total) -
+                                          8.0 * double(settings.outside_bytes));
+    const double t = (budget - bits[0]) / (bits[1] - bits[0]);
+    return std::log(distortion[0]) + t * (std::log(distortion[1]) - std::log(distortion[0]));
+  };
+  if (settings.clusters) {
+    clusters = merge_clusters(clusters, settings.clusters, base_welded.data(), trajectories, adjacency);
+  } else if (settings.mode != RateMode::lossless) {
+    // Automatic K: more clusters cost motion side information and save residual bits. Candidates from the
+    // segmentation's own count down by factors of 2/3, each merged from the segmentation; the search stops at
+    // the first candidate that costs more than the one before.
+    const size_t largest = std::max<size_t>(1, std::min({clusters.count, welded / kVerticesPerCluster, kMaxClusters}));
+    Clusters best = merge_clusters(clusters, largest, base_welded.data(), trajectories, adjacency);
+    double best_cost = candidate_cost(best);
+    for (size_t k = largest * 2 / 3; k >= kMinAutomaticClusters; k = k * 2 / 3) {
+      Clusters candidate = merge_clusters(clusters, k, base_welded.data(), trajectories, adjacency);
+      const double cost = candidate_cost(candidate);
+      if (!(cost < best_cost)) break;
+      best = std::move(candidate), best_cost = cost;
+    }
+    clusters = std::move(best);
+  } else {
+    clusters = merge_clusters(clusters, kLosslessClusters, base_welded.data(), trajectories, adjacency);
+  }
   if (settings.motion_refinement) {
     int iterations = 0;
     clusters = refine_by_motion(clusters, base_welded.data(), trajectories, adjacency, 8, &iterations);
@@ -178,19 +288,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   content.labels = clusters.label;
   report.ms_segmentation = milliseconds_since(start);
 
-  // The scale of the residual steps: from the target error when there is one, else from the motion error.
-  const double spread = frame_spread(clips);
-  const double samples = 3.0 * double(vertex_count) * double(frames_total);
-  double mean_step =
-      std::sqrt(12.0 * std::max(report.e_pi, 1e-12)) * bounding_box_diagonal(base.data(), vertex_count) * 0.1;
-  if (settings.mode == RateMode::error) mean_step = std::sqrt(12.0 * spread / samples) * settings.target / 100.0;
-  double radius = 0;
-  for (size_t w = 0; w < welded; ++w)
-    for (int c = 0; c < 3; ++c) {
-      const double d = base_welded[w * 3 + size_t(c)] - fitted.centroid[clusters.label[w] * 3 + size_t(c)];
-      radius += d * d;
-    }
-  radius = std::sqrt(radius / double(welded)) + 1e-30;
+  const double radius = cluster_radius(base_welded, fitted.centroid, clusters.label);
 
   std::vector<double> predictions;
   StepChoice choice;
@@ -297,7 +395,6 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     }
   } else {
     const double guess = mean_step;
-    const double max_distortion = std::pow(settings.target / 100.0, 2) * spread;
     prepare_motion(kMotionStepRatio * guess);
     residual_rate_control(true);
     const StepChoice first = choice;
