@@ -219,9 +219,11 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   }
   const double sample_share = double(sample.frame_count) / double(frames_total);
   const double max_distortion = std::pow(settings.target / 100.0, 2) * spread;
-  auto candidate_cost = [&](const Clusters& merged) {
+  auto candidate_cost = [&](const Clusters& merged, bool temporal) {
     const Clusters candidate = refine_by_motion(merged, base_welded.data(), sample, adjacency, kSampleRefinements);
     StreamContent trial = content;
+    trial.flags = uint8_t(temporal ? trial.flags | format::kFlagTemporalResiduals
+                                   : trial.flags & ~format::kFlagTemporalResiduals);
     trial.clip_frames = sample_clip_frames;
     trial.cluster_count = uint32_t(candidate.count);
     trial.labels = candidate.label;
@@ -257,24 +259,36 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     const double t = (budget - bits[0]) / (bits[1] - bits[0]);
     return std::log(distortion[0]) + t * (std::log(distortion[1]) - std::log(distortion[0]));
   };
-  if (settings.clusters) {
-    clusters = merge_clusters(clusters, settings.clusters, base_welded.data(), trajectories, adjacency);
-  } else if (settings.mode != RateMode::lossless) {
-    // Automatic K: more clusters cost motion side information and save residual bits. Candidates from the
-    // segmentation's own count down by factors of 2/3, each merged from the segmentation; the search stops at
-    // the first candidate that costs more than the one before.
-    const size_t largest = std::max<size_t>(1, std::min({clusters.count, welded / kVerticesPerCluster, kMaxClusters}));
-    Clusters best = merge_clusters(clusters, largest, base_welded.data(), trajectories, adjacency);
-    double best_cost = candidate_cost(best);
-    for (size_t k = largest * 2 / 3; k >= kMinAutomaticClusters; k = k * 2 / 3) {
-      Clusters candidate = merge_clusters(clusters, k, base_welded.data(), trajectories, adjacency);
-      const double cost = candidate_cost(candidate);
-      if (!(cost < best_cost)) break;
-      best = std::move(candidate), best_cost = cost;
-    }
-    clusters = std::move(best);
+  // Temporal residual prediction (when allowed) is kept when the estimate says it pays: it does for slow
+  // sequences, not always for fast ones (docs/codec.md). The estimate is biased a little against it (each
+  // sample window starts without a previous frame).
+  const bool temporal = settings.temporal_residuals;
+  if (settings.mode == RateMode::lossless) {
+    clusters = merge_clusters(clusters, settings.clusters ? settings.clusters : kLosslessClusters, base_welded.data(),
+                              trajectories, adjacency);
   } else {
-    clusters = merge_clusters(clusters, kLosslessClusters, base_welded.data(), trajectories, adjacency);
+    double best_cost;
+    if (settings.clusters) {
+      clusters = merge_clusters(clusters, settings.clusters, base_welded.data(), trajectories, adjacency);
+      best_cost = temporal ? candidate_cost(clusters, true) : 0;
+    } else {
+      // Automatic K: more clusters cost motion side information and save residual bits. Candidates from the
+      // segmentation's own count down by factors of 2/3, each merged from the segmentation; the search stops
+      // at the first candidate that costs more than the one before.
+      const size_t largest =
+          std::max<size_t>(1, std::min({clusters.count, welded / kVerticesPerCluster, kMaxClusters}));
+      Clusters best = merge_clusters(clusters, largest, base_welded.data(), trajectories, adjacency);
+      best_cost = candidate_cost(best, temporal);
+      for (size_t k = largest * 2 / 3; k >= kMinAutomaticClusters; k = k * 2 / 3) {
+        Clusters candidate = merge_clusters(clusters, k, base_welded.data(), trajectories, adjacency);
+        const double cost = candidate_cost(candidate, temporal);
+        if (!(cost < best_cost)) break;
+        best = std::move(candidate), best_cost = cost;
+      }
+      clusters = std::move(best);
+    }
+    if (temporal && candidate_cost(clusters, false) < best_cost)
+      content.flags = uint8_t(content.flags & ~format::kFlagTemporalResiduals);
   }
   if (settings.motion_refinement) {
     int iterations = 0;
