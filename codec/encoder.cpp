@@ -60,23 +60,6 @@ Status check_input(const std::vector<FrameSequence>& clips, const std::vector<fl
   return Status::Ok();
 }
 
-// ‖A − E(A)‖²_F over the original vertices of every frame (the KG error's denominator).
-double frame_spread(const std::vector<FrameSequence>& clips) {
-  double spread = 0;
-  for (const FrameSequence& clip : clips)
-    for (size_t f = 0; f < clip.frame_count; ++f) {
-      const float* frame = clip.frame(f);
-      double centroid[3] = {0, 0, 0};
-      for (size_t v = 0; v < clip.vertex_count; ++v)
-        for (int c = 0; c < 3; ++c) centroid[c] += frame[v * 3 + size_t(c)];
-      for (double& c : centroid) c /= double(clip.vertex_count);
-      for (size_t v = 0; v < clip.vertex_count; ++v)
-        for (int c = 0; c < 3; ++c)
-          spread += (frame[v * 3 + size_t(c)] - centroid[c]) * (frame[v * 3 + size_t(c)] - centroid[c]);
-    }
-  return spread;
-}
-
 void quantize_motion(const AffineMotion& fitted, double linear_step, double translation_step, StreamContent& content) {
   content.linear_step = float(linear_step);
   content.translation_step = float(translation_step);
@@ -133,6 +116,29 @@ void quantize_weights(const ClusterWeights& weights, StreamContent& content) {
 
 }  // namespace
 
+// ‖A − E(A)‖²_F over the original vertices of every frame (the KG error's denominator).
+double frame_spread(const std::vector<FrameSequence>& clips) {
+  double spread = 0;
+  for (const FrameSequence& clip : clips)
+    for (size_t f = 0; f < clip.frame_count; ++f) {
+      const float* frame = clip.frame(f);
+      double centroid[3] = {0, 0, 0};
+      for (size_t v = 0; v < clip.vertex_count; ++v)
+        for (int c = 0; c < 3; ++c) centroid[c] += frame[v * 3 + size_t(c)];
+      for (double& c : centroid) c /= double(clip.vertex_count);
+      for (size_t v = 0; v < clip.vertex_count; ++v)
+        for (int c = 0; c < 3; ++c)
+          spread += (frame[v * 3 + size_t(c)] - centroid[c]) * (frame[v * 3 + size_t(c)] - centroid[c]);
+    }
+  return spread;
+}
+
+double expected_residual_step(const std::vector<FrameSequence>& clips, double kg_percent) {
+  size_t samples = 0;
+  for (const FrameSequence& clip : clips) samples += 3 * clip.vertex_count * clip.frame_count;
+  return std::sqrt(12.0 * frame_spread(clips) / double(std::max<size_t>(samples, 1))) * kg_percent / 100.0;
+}
+
 Status encode_animation(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
                         const CodecSettings& settings, std::vector<uint8_t>& stream, EncodeReport* report_out,
                         std::vector<FrameSequence>* reconstruction) {
@@ -141,7 +147,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     return Status(StatusCode::invalid_argument, "the rate target must be positive");
   EncodeReport report;
   const size_t vertex_count = clips[0].vertex_count;
-  const WeldedTopology topology = weld_topology(clips);
+  const WeldedTopology topology = weld_topology(clips, &base);
   const VertexAdjacency adjacency = vertex_adjacency(topology);
 
   StreamContent content;
@@ -187,10 +193,9 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   }
   // The scale of the residual steps: from the target error when there is one, else from the motion error.
   const double spread = frame_spread(clips);
-  const double samples = 3.0 * double(vertex_count) * double(frames_total);
   double mean_step = std::sqrt(12.0 * std::max(report.e_pi_before_refinement, 1e-12)) *
                      bounding_box_diagonal(base.data(), vertex_count) * 0.1;
-  if (settings.mode == RateMode::error) mean_step = std::sqrt(12.0 * spread / samples) * settings.target / 100.0;
+  if (settings.mode == RateMode::error) mean_step = expected_residual_step(clips, settings.target);
 
   // The cost of a candidate segmentation for the automatic K, smaller is better: with an error target, the
   // estimated stream bits at the target distortion; with a rate target, the estimated log distortion at the

@@ -15,7 +15,10 @@ uint32_t coordinate_bits(float x) {
   return bits == 0x80000000u ? 0u : bits;
 }
 
-bool same_trajectory(const std::vector<FrameSequence>& clips, uint32_t a, uint32_t b) {
+bool same_trajectory(const std::vector<FrameSequence>& clips, const float* also, uint32_t a, uint32_t b) {
+  if (also)
+    for (int c = 0; c < 3; ++c)
+      if (coordinate_bits(also[a * 3 + c]) != coordinate_bits(also[b * 3 + c])) return false;
   for (const FrameSequence& clip : clips)
     for (size_t f = 0; f < clip.frame_count; ++f) {
       const float* frame = clip.frame(f);
@@ -35,7 +38,7 @@ uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
 
 }  // namespace
 
-WeldedTopology weld_topology(const std::vector<FrameSequence>& clips) {
+WeldedTopology weld_topology(const std::vector<FrameSequence>& clips, const std::vector<float>* also_equal) {
   assert(!clips.empty());
   const size_t vertex_count = clips[0].vertex_count;
   for (const FrameSequence& clip : clips) {
@@ -44,8 +47,17 @@ WeldedTopology weld_topology(const std::vector<FrameSequence>& clips) {
     (void)clip;
   }
 
-  // FNV-1a over each vertex's whole trajectory.
+  assert(!also_equal || also_equal->size() == vertex_count * 3);
+  const float* also = also_equal ? also_equal->data() : nullptr;
+
+  // FNV-1a over each vertex's whole trajectory (and its `also_equal` position).
   std::vector<uint64_t> hash(vertex_count, 1469598103934665603ull);
+  if (also)
+    for (size_t v = 0; v < vertex_count; ++v)
+      for (int c = 0; c < 3; ++c) {
+        hash[v] ^= coordinate_bits(also[v * 3 + c]);
+        hash[v] *= 1099511628211ull;
+      }
   for (const FrameSequence& clip : clips)
     for (size_t f = 0; f < clip.frame_count; ++f) {
       const float* frame = clip.frame(f);
@@ -73,7 +85,7 @@ WeldedTopology weld_topology(const std::vector<FrameSequence>& clips) {
       const uint32_t v = order[i];
       leader[v] = v;
       for (uint32_t candidate : run_leaders)
-        if (same_trajectory(clips, v, candidate)) {
+        if (same_trajectory(clips, also, v, candidate)) {
           leader[v] = candidate;
           break;
         }

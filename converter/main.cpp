@@ -28,7 +28,8 @@ const char* const kUsage =
     "      Write OUT (.glb or .gltf) with every animated primitive baked into POSITION and NORMAL morph\n"
     "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
-    "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--json]\n"
+    "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
+    "         [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
     "      as a SEGMORPH_animation_compression stream. Default target: --error 0.15 (KG error in %%).\n"
     "  decode IN -o OUT\n"
@@ -45,6 +46,7 @@ const char* const kUsage =
     "  --bpvf R           encode: target bits per vertex per frame of the whole output\n"
     "  --lossless         encode: restore the sampled frames bit for bit\n"
     "  --clusters K       encode: number of motion clusters (default: automatic)\n"
+    "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 30 (default 14)\n"
     "  --json             info, encode, verify: print one JSON object instead of text\n"
     "  -q, --quiet        no progress messages on stderr\n"
     "  -h, --help         this help\n"
@@ -58,6 +60,7 @@ struct Options {
   std::string output;
   SampleSettings sampling;
   CodecSettings codec;
+  DracoSettings draco;  // position_bits 0: compress_model chooses them
   bool rate_given = false;
   bool json = false;
   bool quiet = false;
@@ -232,7 +235,7 @@ int run_encode(const Options& options) {
   status = bake_model(file.model, file.scene, file.sampled);
   CompressReport report;
   if (status.ok())
-    status = compress_model(file.model, file.sampled, options.codec, DracoSettings(), report,
+    status = compress_model(file.model, file.sampled, options.codec, options.draco, report,
                             [&](const std::string& message) { progress(options, message); });
   if (!status.ok()) return fail(path, status);
   progress(options, "writing " + options.output);
@@ -352,6 +355,7 @@ int run_verify(const Options& options) {
 
 int run(int argc, char** argv) {
   Options options;
+  options.draco.position_bits = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&](std::string& out) {
@@ -397,6 +401,14 @@ int run(int argc, char** argv) {
       if (end == text.c_str() || *end || clusters < 1 || clusters > 65535)
         return usage_error("--clusters takes a whole number from 1 to 65535, not '" + text + "'");
       options.codec.clusters = size_t(clusters);
+    } else if (arg == "--position-bits") {
+      std::string text;
+      if (!value(text)) return usage_error("--position-bits needs a number");
+      char* end = nullptr;
+      const long bits = std::strtol(text.c_str(), &end, 10);
+      if (end == text.c_str() || *end || bits < 8 || bits > 30)
+        return usage_error("--position-bits takes a whole number from 8 to 30, not '" + text + "'");
+      options.draco.position_bits = int(bits);
     } else if (arg == "--json") {
       options.json = true;
     } else if (arg == "-q" || arg == "--quiet") {

@@ -83,6 +83,9 @@ TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --error 0.5 --bpvf 2").exit_code, 2);
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --error -1").exit_code, 2);
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --clusters 0").exit_code, 2);
+  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 7").exit_code, 2);
+  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 31").exit_code, 2);
+  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 12.5").exit_code, 2);
   EXPECT_EQ(run("verify " + sample("Fox/Fox.glb")).exit_code, 2);
 }
 
@@ -168,6 +171,21 @@ TEST(Cli, BakeWritesGlbAndGltfAndNothingElse) {
   EXPECT_NE(read_text(directory + "/morph.gltf").find("\"uri\": \"morph.bin\""), std::string::npos);
 }
 
+
+// The base mesh's position precision follows the error target unless --position-bits sets it.
+TEST(Cli, BaseMeshPrecisionFollowsTheErrorTarget) {
+  const std::string directory = output_directory("position_bits");
+  const std::string input = sample("Fox/Fox.glb");
+  auto draco_bytes = [&](const std::string& options) {
+    const Result result = run("encode -q " + input + " -o " + directory + "/fox.glb --json " + options);
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return json_number(result.out, "draco_bytes");
+  };
+  const double coarse = draco_bytes("--error 1"), fine = draco_bytes("--error 0.01");
+  EXPECT_LT(coarse, fine);
+  EXPECT_EQ(draco_bytes("--error 1 --position-bits 16"), draco_bytes("--error 0.01 --position-bits 16"));
+  EXPECT_LT(draco_bytes("--error 1 --position-bits 12"), draco_bytes("--error 1 --position-bits 16"));
+}
 
 TEST(Cli, EncodeDecodeAndVerify) {
   const std::string directory = output_directory("encode");

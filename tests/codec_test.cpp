@@ -29,8 +29,9 @@ FrameSequence bending_clip(size_t frames, double bend, double phase) {
       const double x = shape.positions[v * 3], y = shape.positions[v * 3 + 1], z = shape.positions[v * 3 + 2];
       const double angle = x > 0 ? bend * t * x / 2 : 0.0;
       const double ripple = 0.02 * std::sin(3 * x + 6.28 * t + phase);
-      clip.positions.insert(clip.positions.end(), {float(x * std::cos(angle) - y * std::sin(angle)),
-                                                   float(x * std::sin(angle) + y * std::cos(angle) + ripple), float(z)});
+      clip.positions.insert(clip.positions.end(),
+                            {float(x * std::cos(angle) - y * std::sin(angle)),
+                             float(x * std::sin(angle) + y * std::cos(angle) + ripple), float(z)});
     }
     clip.times.push_back(float(f) / 30);
   }
@@ -65,7 +66,8 @@ struct Encoded {
 
 Encoded encode(const std::vector<FrameSequence>& clips, const std::vector<float>& base, const CodecSettings& settings) {
   Encoded encoded;
-  const Status status = encode_animation(clips, base, settings, encoded.stream, &encoded.report, &encoded.reconstruction);
+  const Status status =
+      encode_animation(clips, base, settings, encoded.stream, &encoded.report, &encoded.reconstruction);
   EXPECT_TRUE(status.ok()) << status.message();
   return encoded;
 }
@@ -107,6 +109,48 @@ TEST(Codec, LosslessRestoresTheFloatsBitForBit) {
   EXPECT_LT(bpvf(encoded.stream.size(), clips), 60.0);
 }
 
+// The stream's welding refers to groups of identical base positions (the decoder finds them itself), so the
+// encoder may weld only vertices whose frames AND base positions are equal. A lossy base (Draco) can separate
+// two copies of a seam vertex, and can merge two vertices that move apart: both must round-trip.
+TEST(Codec, WeldingFollowsTheBaseWhereItDisagreesWithTheFrames) {
+  std::vector<FrameSequence> clips = {bending_clip(16, 1.0, 0)};
+  FrameSequence& clip = clips[0];
+  const size_t v = clip.vertex_count;
+  // Vertex v copies vertex 0 (same frames); vertex v + 1 copies vertex 1 at rest, then drifts.
+  std::vector<float> positions;
+  for (size_t f = 0; f < clip.frame_count; ++f) {
+    const float* frame = clip.frame(f);
+    positions.insert(positions.end(), frame, frame + v * 3);
+    positions.insert(positions.end(), frame, frame + 3);
+    positions.insert(positions.end(), {frame[3] + 0.01f * float(f), frame[4], frame[5]});
+  }
+  clip.positions = positions;
+  clip.vertex_count = v + 2;
+  for (size_t t = 0; t < clip.triangles.size(); ++t) {
+    if (clip.triangles[t] == 0) {
+      clip.triangles[t] = uint32_t(v);
+      break;
+    }
+  }
+  for (size_t t = 0; t < clip.triangles.size(); ++t) {
+    if (clip.triangles[t] == 1) {
+      clip.triangles[t] = uint32_t(v + 1);
+      break;
+    }
+  }
+  std::vector<float> base = quantized_base(clip);
+  base[v * 3] += 1e-4f;  // the copy of vertex 0 lands one quantization step away
+  for (RateMode mode : {RateMode::error, RateMode::lossless}) {
+    CodecSettings settings;
+    settings.mode = mode;
+    const Encoded encoded = encode(clips, base, settings);
+    std::vector<FrameSequence> decoded;
+    const Status status = decode_animation(encoded.stream.data(), encoded.stream.size(), base, clip.triangles, decoded);
+    ASSERT_TRUE(status.ok()) << status.message();
+    EXPECT_EQ(decoded[0].positions, encoded.reconstruction[0].positions);
+  }
+}
+
 TEST(Codec, ErrorTargetIsMetWithoutWaste) {
   const std::vector<FrameSequence> clips = {bending_clip(30, 1.0, 0)};
   const std::vector<float> base = quantized_base(clips[0]);
@@ -130,13 +174,15 @@ TEST(Codec, RateTargetWithinFivePercent) {
     settings.target = target;
     const Encoded encoded = encode(clips, base, settings);
     EXPECT_NEAR(bpvf(encoded.stream.size(), clips), target, 0.05 * target)
-        << "motion " << encoded.report.bytes_motion << " B, residuals " << encoded.report.bytes_residuals << " B, steps "
-        << encoded.report.residual_steps[0] << " " << encoded.report.residual_steps[1] << " " << encoded.report.residual_steps[2];
+        << "motion " << encoded.report.bytes_motion << " B, residuals " << encoded.report.bytes_residuals
+        << " B, steps " << encoded.report.residual_steps[0] << " " << encoded.report.residual_steps[1] << " "
+        << encoded.report.residual_steps[2];
   }
 }
 
 TEST(Codec, SeveralClipsShareOneSegmentation) {
-  const std::vector<FrameSequence> clips = {bending_clip(15, 1.0, 0), bending_clip(9, -1.0, 1), bending_clip(4, 0.3, 2)};
+  const std::vector<FrameSequence> clips = {bending_clip(15, 1.0, 0), bending_clip(9, -1.0, 1),
+                                            bending_clip(4, 0.3, 2)};
   const std::vector<float> base = quantized_base(clips[0]);
   const Encoded encoded = encode(clips, base, CodecSettings());
   std::vector<FrameSequence> decoded;
@@ -155,15 +201,18 @@ TEST(CodecHostile, PrefixesTrailingBytesAndWrongBasesAreRefused) {
   const Encoded encoded = encode(clips, base, CodecSettings());
   std::vector<FrameSequence> decoded;
   for (size_t size = 0; size < encoded.stream.size(); ++size)
-    EXPECT_FALSE(decode_animation(encoded.stream.data(), size, base, clips[0].triangles, decoded).ok()) << "prefix of " << size << " bytes";
+    EXPECT_FALSE(decode_animation(encoded.stream.data(), size, base, clips[0].triangles, decoded).ok())
+        << "prefix of " << size << " bytes";
   std::vector<uint8_t> longer = encoded.stream;
   longer.push_back(0);
   EXPECT_FALSE(decode_animation(longer.data(), longer.size(), base, clips[0].triangles, decoded).ok());
   const std::vector<float> smaller(base.begin(), base.end() - 3);
-  EXPECT_FALSE(decode_animation(encoded.stream.data(), encoded.stream.size(), smaller, clips[0].triangles, decoded).ok());
+  EXPECT_FALSE(
+      decode_animation(encoded.stream.data(), encoded.stream.size(), smaller, clips[0].triangles, decoded).ok());
   std::vector<uint8_t> version = encoded.stream;
   version[4] = 99;
-  EXPECT_EQ(decode_animation(version.data(), version.size(), base, clips[0].triangles, decoded).code(), StatusCode::unsupported);
+  EXPECT_EQ(decode_animation(version.data(), version.size(), base, clips[0].triangles, decoded).code(),
+            StatusCode::unsupported);
 }
 
 TEST(CodecHostile, RandomByteFlipsNeverCrash) {
@@ -174,7 +223,8 @@ TEST(CodecHostile, RandomByteFlipsNeverCrash) {
   size_t refused = 0;
   for (int trial = 0; trial < 300; ++trial) {
     std::vector<uint8_t> bytes = encoded.stream;
-    for (int flips = 1 + int(random() % 4); flips > 0; --flips) bytes[random() % bytes.size()] ^= uint8_t(1 + random() % 255);
+    for (int flips = 1 + int(random() % 4); flips > 0; --flips)
+      bytes[random() % bytes.size()] ^= uint8_t(1 + random() % 255);
     std::vector<FrameSequence> decoded;
     const Status status = decode_animation(bytes.data(), bytes.size(), base, clips[0].triangles, decoded);
     if (!status.ok()) {
