@@ -15,6 +15,7 @@ enum class StatusCode {
   unsupported,       // the input is valid but uses something segmorph does not handle
   nothing_to_do,     // the input is valid but has nothing segmorph can work on (no animation)
   numerical,         // no convergence, singular system
+  internal,          // segmorph broke one of its own promises (a bug)
 };
 
 class Status {

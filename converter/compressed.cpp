@@ -143,7 +143,19 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       primitive_settings.outside_bytes += draco_bytes.size();
       std::vector<uint8_t> stream;
       EncodeReport encode_report;
-      SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, primitive_settings, stream, &encode_report));
+      std::vector<FrameSequence> reconstruction, check;
+      SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, primitive_settings, stream,
+                                                &encode_report, &reconstruction));
+      // Never write a stream a decoder would read differently: decode it as a reader will (a few tens of
+      // milliseconds) and compare with the encoder's own reconstruction.
+      const Status check_status = decode_animation(stream.data(), stream.size(), decoded.attributes[0].values,
+                                                   decoded.triangles, check);
+      bool same = check_status.ok() && check.size() == reconstruction.size();
+      for (size_t c = 0; same && c < check.size(); ++c) same = check[c].positions == reconstruction[c].positions;
+      if (!same)
+        return Status(StatusCode::internal, what + ": the animation stream does not decode to the encoder's frames (" +
+                                                (check_status.ok() ? "different frames" : check_status.message()) +
+                                                "); this is a segmorph bug, please report it");
       report.primitives.push_back(encode_report);
       report.draco_bytes += draco_bytes.size();
       report.animation_bytes += stream.size();
