@@ -1,7 +1,5 @@
 #include "gltf_io.h"
 
-#include "segmorph_extension.h"
-
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -10,8 +8,12 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
+
+#include "json_prepass.h"
+#include "segmorph_extension.h"
 
 namespace segmorph {
 namespace {
@@ -30,8 +32,10 @@ std::string one_line(std::string s) {
   while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
   std::string out;
   for (char c : s) {
-    if (c == '\n') out += "; ";
-    else if (c != '\r') out += c;
+    if (c == '\n')
+      out += "; ";
+    else if (c != '\r')
+      out += c;
   }
   return out;
 }
@@ -146,7 +150,8 @@ void for_each_extension_view(tinygltf::Model& model, F f) {
     for (tinygltf::Primitive& primitive : mesh.primitives) {
       auto compressed_it = primitive.extensions.find(kExtensionName);
       CompressedPrimitive compressed;
-      if (compressed_it != primitive.extensions.end() && parse_compressed_primitive(compressed_it->second, compressed).ok()) {
+      if (compressed_it != primitive.extensions.end() &&
+          parse_compressed_primitive(compressed_it->second, compressed).ok()) {
         f(compressed.buffer_view);
         compressed_it->second = compressed_primitive_value(compressed);
       }
@@ -159,9 +164,48 @@ void for_each_extension_view(tinygltf::Model& model, F f) {
     }
 }
 
+uint32_t read_u32(const unsigned char* p) {
+  return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
+void put_u32(std::string& out, size_t at, uint32_t value) {
+  for (int i = 0; i < 4; ++i) out[at + size_t(i)] = char(value >> (8 * i));
+}
+
+// The file with its JSON passed through drop_draco_indices, in `rewritten`; empty when nothing changed (or
+// the GLB is malformed, which tinygltf then reports).
+Status rewrite_for_tinygltf(const std::string& path, bool binary, std::string& rewritten) {
+  rewritten.clear();
+  std::ifstream file(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (bytes.find("KHR_draco_mesh_compression") == std::string::npos) return Status::Ok();
+  bool changed = false;
+  if (!binary) {
+    SEGMORPH_RETURN_IF_ERROR(drop_draco_indices(bytes, changed));
+    if (changed) rewritten = std::move(bytes);
+    return Status::Ok();
+  }
+  // GLB: a 12-byte header, then the JSON chunk (length, type, data), then the rest, kept as it is.
+  const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+  if (bytes.size() < 20 || read_u32(data + 16) != 0x4E4F534Au) return Status::Ok();
+  const uint64_t json_length = read_u32(data + 12);
+  if (20 + json_length > bytes.size()) return Status::Ok();
+  std::string json = bytes.substr(20, size_t(json_length));
+  SEGMORPH_RETURN_IF_ERROR(drop_draco_indices(json, changed));
+  if (!changed) return Status::Ok();
+  while (json.size() % 4) json += ' ';
+  rewritten.assign(bytes, 0, 20);
+  rewritten += json;
+  rewritten.append(bytes, size_t(20 + json_length), std::string::npos);
+  put_u32(rewritten, 8, uint32_t(rewritten.size()));
+  put_u32(rewritten, 12, uint32_t(json.size()));
+  return Status::Ok();
+}
+
 }  // namespace
 
-bool has_gltf_extension(const std::string& path) { return ends_with(path, ".glb") || ends_with(path, ".gltf"); }
+bool has_gltf_extension(const std::string& path) {
+  return ends_with(path, ".glb") || ends_with(path, ".gltf");
+}
 
 Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<std::string>* warnings) {
   std::ifstream file(path, std::ios::binary);
@@ -183,18 +227,32 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
   }
   file.close();
 
+  // Valid files tinygltf 2.7 refuses are rewritten in memory first (json_prepass.h); the rest load as they are.
+  std::string rewritten;
+  SEGMORPH_RETURN_IF_ERROR(rewrite_for_tinygltf(path, binary, rewritten));
+
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keep_encoded_image, nullptr);
   std::string error, warning;
-  const bool loaded = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
-                             : loader.LoadASCIIFromFile(&model, &error, &warning, path);
+  const size_t slash = path.find_last_of('/');
+  const std::string directory = slash == std::string::npos ? std::string() : path.substr(0, slash);
+  bool loaded;
+  if (!rewritten.empty())
+    loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
+                                                  reinterpret_cast<const unsigned char*>(rewritten.data()),
+                                                  unsigned(rewritten.size()), directory)
+                    : loader.LoadASCIIFromString(&model, &error, &warning, rewritten.data(), unsigned(rewritten.size()),
+                                                 directory);
+  else
+    loaded = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
+                    : loader.LoadASCIIFromFile(&model, &error, &warning, path);
   if (!loaded) return Status(StatusCode::bad_data, "cannot parse glTF: " + one_line(error.empty() ? warning : error));
   if (warnings && !warning.empty()) warnings->push_back(one_line(warning));
 
   for (const char* name : kUnreadableExtensions) {
     if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), name) != model.extensionsUsed.end())
-      return Status(StatusCode::unsupported, std::string("uses ") + name +
-                                                 ", which segmorph does not decode; decompress the file first");
+      return Status(StatusCode::unsupported,
+                    std::string("uses ") + name + ", which segmorph does not decode; decompress the file first");
   }
   return Status::Ok();
 }

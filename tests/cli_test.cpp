@@ -2,8 +2,8 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
-#include <filesystem>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -28,7 +28,9 @@ std::string read_text(const std::string& path) {
   return text.str();
 }
 
-void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
 
 Result run(const std::string& arguments) {
   const std::string out = temporary_path("cli.out"), err = temporary_path("cli.err");
@@ -41,7 +43,9 @@ Result run(const std::string& arguments) {
   return result;
 }
 
-std::string sample(const std::string& relative) { return std::string(SEGMORPH_SAMPLES_DIR) + "/" + relative; }
+std::string sample(const std::string& relative) {
+  return std::string(SEGMORPH_SAMPLES_DIR) + "/" + relative;
+}
 
 // A fresh directory for outputs, so leftovers are easy to see.
 std::string output_directory(const std::string& name) {
@@ -107,9 +111,8 @@ TEST(Cli, BadInputsFailCleanly) {
   write_text(directory + "/still.gltf", R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{}]})");
   expect_clean_failure(directory + "/still.gltf", "nothing animated");
 
-  write_text(directory + "/meshopt.gltf",
-             R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_meshopt_compression"],)"
-             R"("extensionsRequired":["EXT_meshopt_compression"],"nodes":[{}]})");
+  write_text(directory + "/meshopt.gltf", R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_meshopt_compression"],)"
+                                          R"("extensionsRequired":["EXT_meshopt_compression"],"nodes":[{}]})");
   expect_clean_failure(directory + "/meshopt.gltf", "EXT_meshopt_compression");
 
   // SimpleMorph with its first accessor claiming more vertices than its bufferView holds.
@@ -151,7 +154,8 @@ TEST(Cli, CorruptedInputsFailCleanlyOrBake) {
 }
 
 TEST(Cli, UnwritableOutputFailsCleanly) {
-  const Result result = run("bake -q " + sample("SimpleSkin/SimpleSkin.gltf") + " -o " + temporary_path("no/such/dir/out.glb"));
+  const Result result =
+      run("bake -q " + sample("SimpleSkin/SimpleSkin.gltf") + " -o " + temporary_path("no/such/dir/out.glb"));
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
 }
@@ -171,7 +175,6 @@ TEST(Cli, BakeWritesGlbAndGltfAndNothingElse) {
   EXPECT_NE(read_text(directory + "/morph.gltf").find("\"uri\": \"morph.bin\""), std::string::npos);
 }
 
-
 // The base mesh's position precision follows the error target unless --position-bits sets it.
 TEST(Cli, BaseMeshPrecisionFollowsTheErrorTarget) {
   const std::string directory = output_directory("position_bits");
@@ -185,6 +188,55 @@ TEST(Cli, BaseMeshPrecisionFollowsTheErrorTarget) {
   EXPECT_LT(coarse, fine);
   EXPECT_EQ(draco_bytes("--error 1 --position-bits 16"), draco_bytes("--error 0.01 --position-bits 16"));
   EXPECT_LT(draco_bytes("--error 1 --position-bits 12"), draco_bytes("--error 1 --position-bits 16"));
+}
+
+// KHR_draco_mesh_compression allows an indices accessor without a bufferView (other tools write one);
+// tinygltf 2.7 refuses it, so segmorph rewrites the JSON first. Both .gltf and .glb.
+TEST(Cli, DracoIndicesWithoutBufferViewAreRead) {
+  const std::string directory = output_directory("draco_indices");
+  const std::string input = sample("AnimatedMorphCube/AnimatedMorphCube.glb");
+  ASSERT_EQ(run("encode -q " + input + " -o " + directory + "/cube.gltf").exit_code, 0);
+  std::string json = read_text(directory + "/cube.gltf");
+  // Append an accessor to the accessors array (its closing bracket: the first ']' at its nesting level) and
+  // point the compressed primitive's indices at it.
+  const size_t open = json.find('[', json.find("\"accessors\""));
+  size_t close = open, depth = 0, count = 0;
+  for (; close < json.size(); ++close) {
+    if (depth == 1 && json[close] == '{') ++count;  // an accessor starts
+    if (json[close] == '[' || json[close] == '{') ++depth;
+    if (json[close] == ']' || json[close] == '}') --depth;
+    if (depth == 0) break;
+  }
+  ASSERT_LT(close, json.size());
+  json.insert(close, ", {\"componentType\": 5123, \"count\": 36, \"type\": \"SCALAR\"}");
+  const size_t attributes = json.find("\"attributes\"", json.find("\"meshes\""));
+  ASSERT_NE(attributes, std::string::npos);
+  json.insert(attributes, "\"indices\": " + std::to_string(count) + ", ");
+  write_text(directory + "/cube.gltf", json);
+
+  Result result = run("verify -q " + input + " " + directory + "/cube.gltf --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(json_number(result.out, "vertices"), 24);
+  EXPECT_LE(json_number(result.out, "kg_percent"), 0.15);
+
+  // The same JSON in a GLB whose binary chunk holds what cube.bin holds.
+  std::string bin = read_text(directory + "/cube.bin");
+  const size_t uri = json.find("\"uri\": \"cube.bin\"");
+  ASSERT_NE(uri, std::string::npos);
+  json.replace(uri, 17, "\"name\": \"chunk\"");  // the buffer loses its uri: it is the GLB's chunk
+  while (json.size() % 4) json += ' ';
+  while (bin.size() % 4) bin += '\0';
+  auto u32 = [](size_t value) {
+    std::string out(4, '\0');
+    for (int i = 0; i < 4; ++i) out[size_t(i)] = char(value >> (8 * i));
+    return out;
+  };
+  write_text(directory + "/cube.glb", "glTF" + u32(2) + u32(12 + 8 + json.size() + 8 + bin.size()) + u32(json.size()) +
+                                          "JSON" + json + u32(bin.size()) + std::string("BIN\0", 4) + bin);
+  result = run("verify -q " + input + " " + directory + "/cube.glb --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_LE(json_number(result.out, "kg_percent"), 0.15);
+  ASSERT_EQ(run("decode -q " + directory + "/cube.glb -o " + directory + "/decoded.glb").exit_code, 0);
 }
 
 TEST(Cli, EncodeDecodeAndVerify) {
@@ -223,14 +275,16 @@ TEST(Cli, EncodeDecodeAndVerify) {
 
 TEST(Cli, CorruptedEncodedFilesFailCleanlyOrDecode) {
   const std::string directory = output_directory("corrupt_encoded");
-  ASSERT_EQ(run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory + "/encoded.glb").exit_code, 0);
+  ASSERT_EQ(run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory + "/encoded.glb").exit_code,
+            0);
   const std::string original = read_text(directory + "/encoded.glb");
   std::mt19937 random(99);
   for (int trial = 0; trial < 60; ++trial) {
     std::string bytes = original;
     // Damage the binary chunk (past the JSON), where the Draco and animation streams are.
     const size_t from = bytes.size() / 3;
-    for (int c = 0; c < 1 + int(random() % 6); ++c) bytes[from + random() % (bytes.size() - from)] = char(random() % 256);
+    for (int c = 0; c < 1 + int(random() % 6); ++c)
+      bytes[from + random() % (bytes.size() - from)] = char(random() % 256);
     if (trial % 6 == 0) bytes.resize(from + random() % (bytes.size() - from));
     write_text(directory + "/input.glb", bytes);
     fs::remove(directory + "/out.glb");

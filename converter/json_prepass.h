@@ -1,0 +1,19 @@
+// A pass over a glTF's JSON before tinygltf parses it, for valid files tinygltf 2.7 refuses.
+//
+// KHR_draco_mesh_compression lets a compressed primitive keep an `indices` accessor with no bufferView (the
+// triangles are in the Draco data); tinygltf 2.7 rejects any indices accessor without a bufferView. Such
+// primitives lose their `indices` here; the Draco decoder supplies the triangles (decode_draco_primitives).
+#pragma once
+
+#include <string>
+
+#include "status.h"
+
+namespace segmorph {
+
+// Rewrites `json` (a whole glTF JSON document) as described above. Sets `changed` when it removed anything;
+// leaves `json` as it was otherwise. Every other byte of the document is kept as written. Fails on JSON it
+// cannot parse (nesting deeper than 256 levels included), which tinygltf would refuse too.
+Status drop_draco_indices(std::string& json, bool& changed);
+
+}  // namespace segmorph
