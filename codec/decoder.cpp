@@ -26,34 +26,56 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
   const ResidualTraversal traversal = residual_traversal(content, triangles);
   ResidualReconstructor reconstructor(content, traversal);
 
-  // One frame at a time, so that what the loop reads in traversal order (predictions, symbols) and writes
-  // (welded positions) stays in cache.
+  // Two frames at a time (ResidualReconstructor::two_frames), so that what the loop reads in traversal order
+  // (predictions, symbols) and writes (welded positions) stays in cache.
   const size_t vertex_count = content.vertex_count, row = size_t(content.welded_count) * 3;
-  std::vector<double> predictions(row);
-  std::vector<int64_t> symbols(row);
-  std::vector<float> frame_out(row);
+  std::vector<double> predictions(2 * row);
+  std::vector<int64_t> symbols(2 * row);
+  std::vector<float> welded_frames(2 * row);
+  // Frame `frame` of the stream into slot s (0 or 1) of the buffers: prediction and symbols.
+  auto prepare = [&](size_t frame, size_t s) {
+    predict_frame(welded.data(), motion, weights, frame, &predictions[s * row]);
+    std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, symbols.begin() + ptrdiff_t(s * row));
+  };
+  auto symbol = [&](size_t s) {
+    const int64_t* from = &symbols[s * row];
+    return [from](size_t i, double, double) { return from[i]; };
+  };
+  auto output = [&](size_t s) {
+    float* to = &welded_frames[s * row];
+    return [to](size_t i, float x) { to[i] = x; };
+  };
+  // Slot s, reconstructed, into frame f of the clip in the original vertex order.
+  auto finish = [&](size_t s, FrameSequence& clip, size_t f) {
+    const float* frame = &welded_frames[s * row];
+    for (size_t i = 0; i < row; ++i)
+      if (!std::isfinite(frame[i])) return false;
+    float* out = &clip.positions[f * vertex_count * 3];
+    for (size_t v = 0; v < vertex_count; ++v) {
+      const float* in = &frame[size_t(content.welded_index[v]) * 3];
+      out[v * 3] = in[0], out[v * 3 + 1] = in[1], out[v * 3 + 2] = in[2];
+    }
+    return true;
+  };
   clips.assign(content.clip_frames.size(), FrameSequence());
-  size_t frame = 0;
+  size_t frame = 0;  // in the stream
   for (size_t c = 0; c < clips.size(); ++c) {
     FrameSequence& clip = clips[c];
     clip.vertex_count = vertex_count;
     clip.frame_count = content.clip_frames[c];
     clip.positions.resize(clip.frame_count * vertex_count * 3);
     reconstructor.start_clip();
-    for (size_t f = 0; f < clip.frame_count; ++f, ++frame) {
-      predict_frame(welded.data(), motion, weights, frame, predictions.data());
-      std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, symbols.begin());
-      reconstructor.frame(
-          predictions.data(), [&](size_t i, double, double) { return symbols[i]; },
-          [&](size_t i, float x) { frame_out[i] = x; });
-      for (float x : frame_out)
-        if (!std::isfinite(x))
+    for (size_t f = 0; f < clip.frame_count;) {
+      const size_t count = std::min<size_t>(2, clip.frame_count - f);
+      for (size_t s = 0; s < count; ++s) prepare(frame + s, s);
+      if (count == 2)
+        reconstructor.two_frames(&predictions[0], symbol(0), output(0), &predictions[row], symbol(1), output(1));
+      else
+        reconstructor.frame(&predictions[0], symbol(0), output(0));
+      for (size_t s = 0; s < count; ++s)
+        if (!finish(s, clip, f + s))
           return Status(StatusCode::bad_data, "animation stream decodes to NaN or infinite positions");
-      float* out = &clip.positions[f * vertex_count * 3];
-      for (size_t v = 0; v < vertex_count; ++v) {
-        const float* in = &frame_out[size_t(content.welded_index[v]) * 3];
-        out[v * 3] = in[0], out[v * 3 + 1] = in[1], out[v * 3 + 2] = in[2];
-      }
+      f += count, frame += count;
     }
   }
   return Status::Ok();

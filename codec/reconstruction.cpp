@@ -119,7 +119,9 @@ ResidualReconstructor::ResidualReconstructor(const StreamContent& content, const
       steps_{double(content.residual_step[0]), double(content.residual_step[1]), double(content.residual_step[2])},
       previous_(traversal.order.size() * 3, 0.0),
       current_(traversal.order.size() * 3, 0.0),
-      change_(traversal.order.size() * 3, 0.0) {}
+      change_(traversal.order.size() * 3, 0.0),
+      second_(traversal.order.size() * 3, 0.0),
+      second_change_(traversal.order.size() * 3, 0.0) {}
 
 void ResidualReconstructor::start_clip() {
   std::fill(previous_.begin(), previous_.end(), 0.0);

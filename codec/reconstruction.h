@@ -67,16 +67,27 @@ class ResidualReconstructor {
   template <typename Symbol, typename Output>
   void frame(const double* predictions, Symbol symbol, Output output);
 
+  // The next two frames of the clip: the same as frame(a…) then frame(b…), the symbols requested and the
+  // outputs given in another interleaving (each frame's own order is kept), and about twice as fast: the two
+  // frames' chains of dependent operations overlap.
+  template <typename SymbolA, typename OutputA, typename SymbolB, typename OutputB>
+  void two_frames(const double* predictions_a, SymbolA symbol_a, OutputA output_a, const double* predictions_b,
+                  SymbolB symbol_b, OutputB output_b);
+
  private:
+  template <typename F>
+  void with_flags(F f) const;
   template <bool kLossless, bool kTemporal, bool kSpatial, typename Symbol, typename Output>
-  void frame_with(const double* predictions, Symbol symbol, Output output);
+  void vertex(size_t position, const double* predictions, Symbol& symbol, Output& output, const double* previous,
+              double* current, double* change) const;
 
   const ResidualTraversal& traversal_;
   bool lossless_, temporal_, spatial_;
   double steps_[3];
   // By position in the traversal (W × 3). change: what a later neighbour's spatial prediction reads of a
-  // reconstructed residual (c_j above), computed once per vertex.
-  std::vector<double> previous_, current_, change_;
+  // reconstructed residual (c_j above), computed once per vertex. second_, second_change_: two_frames' second
+  // frame.
+  std::vector<double> previous_, current_, change_, second_, second_change_;
 };
 
 // The clips (original vertex order) of a content read by read_stream against `base`, with the base mesh's

@@ -1,63 +1,91 @@
 // Template definitions of reconstruction.h.
 #pragma once
 
+#include <type_traits>
+
 namespace segmorph {
 
-template <typename Symbol, typename Output>
-void ResidualReconstructor::frame(const double* predictions, Symbol symbol, Output output) {
-  // The flags as compile-time constants, so that the loop carries no tests of them.
-  if (lossless_) {
+// Calls f(lossless, temporal, spatial) with the flags as std::integral_constant values, so that the loops f
+// instantiates carry no tests of them.
+template <typename F>
+void ResidualReconstructor::with_flags(F f) const {
+  auto by_prediction = [&](auto lossless) {
     if (temporal_ && spatial_)
-      frame_with<true, true, true>(predictions, symbol, output);
+      f(lossless, std::true_type(), std::true_type());
     else if (temporal_)
-      frame_with<true, true, false>(predictions, symbol, output);
+      f(lossless, std::true_type(), std::false_type());
     else if (spatial_)
-      frame_with<true, false, true>(predictions, symbol, output);
+      f(lossless, std::false_type(), std::true_type());
     else
-      frame_with<true, false, false>(predictions, symbol, output);
-  } else {
-    if (temporal_ && spatial_)
-      frame_with<false, true, true>(predictions, symbol, output);
-    else if (temporal_)
-      frame_with<false, true, false>(predictions, symbol, output);
-    else if (spatial_)
-      frame_with<false, false, true>(predictions, symbol, output);
-    else
-      frame_with<false, false, false>(predictions, symbol, output);
-  }
+      f(lossless, std::false_type(), std::false_type());
+  };
+  if (lossless_)
+    by_prediction(std::true_type());
+  else
+    by_prediction(std::false_type());
 }
 
 template <bool kLossless, bool kTemporal, bool kSpatial, typename Symbol, typename Output>
-void ResidualReconstructor::frame_with(const double* predictions, Symbol symbol, Output output) {
-  const size_t welded = traversal_.order.size();
-  for (size_t position = 0; position < welded; ++position) {
-    const uint32_t v = traversal_.order[position];
-    const uint32_t begin = traversal_.earlier_offset[position], end = traversal_.earlier_offset[position + 1];
-    double sum[3] = {0, 0, 0};
-    if (kSpatial)
-      for (uint32_t j = begin; j < end; ++j) {
-        const double* c = &change_[size_t(traversal_.earlier[j]) * 3];
-        sum[0] += c[0], sum[1] += c[1], sum[2] += c[2];
-      }
-    for (size_t axis = 0; axis < 3; ++axis) {
-      const size_t at = position * 3 + axis, i = size_t(v) * 3 + axis;
-      const double p = predictions[i];
-      double r = kTemporal ? previous_[at] : 0.0;
-      if (kSpatial && end > begin) r += sum[axis] * (1.0 / double(end - begin));
-      const int64_t k = symbol(i, p, r);
-      float x;
-      if (kLossless) {
-        x = from_ordered_bits(ordered_bits(float(p + r)) + k);
-        current_[at] = double(x) - p;
-      } else {
-        current_[at] = r + double(k) * steps_[axis];
-        x = float(p + current_[at]);
-      }
-      change_[at] = kTemporal ? current_[at] - previous_[at] : current_[at];
-      output(i, x);
+void ResidualReconstructor::vertex(size_t position, const double* predictions, Symbol& symbol, Output& output,
+                                   const double* previous, double* current, double* change) const {
+  const uint32_t v = traversal_.order[position];
+  const uint32_t begin = traversal_.earlier_offset[position], end = traversal_.earlier_offset[position + 1];
+  double sum[3] = {0, 0, 0};
+  if (kSpatial)
+    for (uint32_t j = begin; j < end; ++j) {
+      const double* c = &change[size_t(traversal_.earlier[j]) * 3];
+      sum[0] += c[0], sum[1] += c[1], sum[2] += c[2];
     }
+  for (size_t axis = 0; axis < 3; ++axis) {
+    const size_t at = position * 3 + axis, i = size_t(v) * 3 + axis;
+    const double p = predictions[i];
+    double r = kTemporal ? previous[at] : 0.0;
+    if (kSpatial && end > begin) r += sum[axis] * (1.0 / double(end - begin));
+    const int64_t k = symbol(i, p, r);
+    float x;
+    if (kLossless) {
+      x = from_ordered_bits(ordered_bits(float(p + r)) + k);
+      current[at] = double(x) - p;
+    } else {
+      current[at] = r + double(k) * steps_[axis];
+      x = float(p + current[at]);
+    }
+    change[at] = kTemporal ? current[at] - previous[at] : current[at];
+    output(i, x);
   }
+}
+
+template <typename Symbol, typename Output>
+void ResidualReconstructor::frame(const double* predictions, Symbol symbol, Output output) {
+  with_flags([&](auto lossless, auto temporal, auto spatial) {
+    for (size_t position = 0; position < traversal_.order.size(); ++position)
+      vertex<decltype(lossless)::value, decltype(temporal)::value, decltype(spatial)::value>(
+          position, predictions, symbol, output, previous_.data(), current_.data(), change_.data());
+  });
   previous_.swap(current_);
+}
+
+template <typename SymbolA, typename OutputA, typename SymbolB, typename OutputB>
+void ResidualReconstructor::two_frames(const double* predictions_a, SymbolA symbol_a, OutputA output_a,
+                                       const double* predictions_b, SymbolB symbol_b, OutputB output_b) {
+  // The second frame runs one vertex behind the first: a vertex needs only its own residual in the frame
+  // before and its earlier neighbours' in its own frame, both done by then.
+  const size_t count = traversal_.order.size();
+  with_flags([&](auto lossless, auto temporal, auto spatial) {
+    constexpr bool kLossless = decltype(lossless)::value, kTemporal = decltype(temporal)::value,
+                   kSpatial = decltype(spatial)::value;
+    for (size_t position = 0; position < count; ++position) {
+      vertex<kLossless, kTemporal, kSpatial>(position, predictions_a, symbol_a, output_a, previous_.data(),
+                                             current_.data(), change_.data());
+      if (position > 0)
+        vertex<kLossless, kTemporal, kSpatial>(position - 1, predictions_b, symbol_b, output_b, current_.data(),
+                                               second_.data(), second_change_.data());
+    }
+    if (count > 0)
+      vertex<kLossless, kTemporal, kSpatial>(count - 1, predictions_b, symbol_b, output_b, current_.data(),
+                                             second_.data(), second_change_.data());
+  });
+  previous_.swap(second_);
 }
 
 }  // namespace segmorph
