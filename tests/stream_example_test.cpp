@@ -1,0 +1,164 @@
+// The worked example of spec/bitstream.md (section 9): a hand-built stream content, the exact bytes write_stream
+// makes of it, the content read_stream gets back, and the frames it decodes to.
+//
+// When the stream format changes (a model, a field), only kExampleHex changes: the failure message prints the
+// new bytes; paste them here and into spec/bitstream.md (section 9.2, and the walk-through where it quotes
+// bytes or positions). The content and the frames do not depend on how symbols are entropy coded.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "codec.h"
+#include "stream.h"
+#include "stream_format.h"
+
+namespace segmorph {
+namespace {
+
+constexpr char kExampleHex[] =
+    "53474d41010646000000100445d5db1a3c8ed7bc141eada18000000037ee2e161dd2d2d31f1aaf4c3e8b4fa4457ea8dd"
+    "3449f56ffaa1356ffcb1f97f0355918b25ccce41daf691a585dd2ebd1085164c";
+
+// Base positions (V = 8): a strip of two unit squares, with vertex 6 a seam copy of vertex 4 (welded) and
+// vertex 7 a copy of vertex 2 that moves on its own (not welded).
+std::vector<float> example_base() {
+  return {0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 1, 0, 1, 1, 0, 2, 1, 0, 1, 1, 0, 2, 0, 0};
+}
+
+std::vector<uint32_t> example_triangles() {
+  return {0, 1, 4, 0, 4, 3, 1, 2, 5, 1, 5, 6, 2, 7, 5};
+}
+
+StreamContent example_content() {
+  StreamContent c;
+  c.flags = format::kFlagTemporalResiduals | format::kFlagSpatialResiduals;
+  c.vertex_count = 8;
+  c.welded_index = {0, 1, 2, 3, 4, 5, 4, 6};
+  c.welded_count = 7;
+  c.clip_frames = {2, 1};
+  c.cluster_count = 2;
+  c.labels = {0, 0, 1, 0, 0, 1, 1};
+  c.linear_step = 0.03125f;
+  c.translation_step = 0.015625f;
+  c.motion = {
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  0, 0, 0,   // frame 0, cluster 0
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  0, 0, 0,   // frame 0, cluster 1
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  1, 0, 0,   // frame 1, cluster 0
+      0, 0, 0, 0, 0, 0, 0, 0, -2, 0, 0, 16,  // frame 1, cluster 1
+      3, 0, 0, 0, 0, 0, 0, 0, 0,  2, 0, 0,   // frame 2, cluster 0
+      0, 1, 0, 0, 0, 0, 0, 0, -1, 0, 0, 8,   // frame 2, cluster 1
+  };
+  c.weight_bits = 8;
+  c.weight_offset = {0, 0, 1, 2, 2, 3, 3, 3};
+  c.weight_cluster = {1, 0, 1};
+  c.weight_value = {64, -8, 32};
+  c.residual_step[0] = 0.01f;
+  c.residual_step[1] = 0.01f;
+  c.residual_step[2] = 0.02f;
+  // clang-format off
+  c.residuals = {
+      // welded vertex 0, 1, ..., 6; x, y, z each
+      0, 0, 0,  0, 0, 0,   0, 0, 0,  0, -1, 0,  0, 0, 0,   0, 0, 0,   2, 0, 0,   // frame 0
+      1, 0, 0,  0, -1, 0,  0, 0, 3,  0, 0, 0,   -2, 0, 1,  0, 0, 0,   0, 1, -1,  // frame 1
+      0, 0, 0,  1, 1, 0,   0, 0, 0,  0, 2, 0,   0, 0, 0,   -1, 0, 0,  0, 0, 5,   // frame 2
+  };
+  // clang-format on
+  return c;
+}
+
+// The decoded frames (clip 0: frames 0 and 1; clip 1: frame 2), V × 3 binary32 bit patterns each.
+constexpr uint32_t kExampleFrames[3][8][3] = {
+    {{0x00000000, 0x00000000, 0x00000000},
+     {0x3f800000, 0x00000000, 0x00000000},
+     {0x40000000, 0x00000000, 0x00000000},
+     {0x00000000, 0x3f7d70a4, 0x00000000},
+     {0x3f800000, 0x3f7f258c, 0x00000000},
+     {0x40000000, 0x3f7fb72f, 0x00000000},
+     {0x3f800000, 0x3f7f258c, 0x00000000},
+     {0x400147ae, 0xba11a2b4, 0x00000000}},
+    {{0x3cd1eb85, 0x00000000, 0x00000000},
+     {0x3f82c7ae, 0xbc23d70a, 0x3d800000},
+     {0x40009bd7, 0xbc23d70a, 0x3ea2b852},
+     {0x3cd1eb85, 0x3f7d70a4, 0x00000000},
+     {0x3f807852, 0x3f7e4b18, 0x3d51eb85},
+     {0x4000369d, 0x3f7db975, 0x3e8da741},
+     {0x3f807852, 0x3f7e4b18, 0x3d51eb85},
+     {0x4001b4e8, 0x3a11a2b4, 0x3e8bf259}},
+    {{0xbc800000, 0x00000000, 0x00000000},
+     {0x3f887259, 0x3c23d70a, 0x3d000000},
+     {0x3fff37ae, 0x3c23d70a, 0x3e040000},
+     {0xbc800000, 0x3f828f5c, 0x00000000},
+     {0x3f89828f, 0x3f8147ae, 0x3c800000},
+     {0x400130ed, 0x3f8147ae, 0x3e000000},
+     {0x3f89828f, 0x3f8147ae, 0x3c800000},
+     {0x3fff2a19, 0x3c23d70a, 0x3e666666}},
+};
+
+std::string hex(const std::vector<uint8_t>& bytes) {
+  std::string out;
+  char digits[3];
+  for (uint8_t byte : bytes) {
+    std::snprintf(digits, sizeof(digits), "%02x", byte);
+    out += digits;
+  }
+  return out;
+}
+
+std::vector<uint8_t> written() {
+  std::vector<uint8_t> bytes;
+  write_stream(example_content(), example_base(), bytes);
+  return bytes;
+}
+
+TEST(StreamExample, BytesAreTheAppendixBytes) {
+  EXPECT_EQ(hex(written()), kExampleHex) << "update kExampleHex and spec/bitstream.md section 9";
+}
+
+TEST(StreamExample, ReadsBackTheContent) {
+  const std::vector<uint8_t> bytes = written();
+  StreamContent read;
+  const Status status = read_stream(bytes.data(), bytes.size(), example_base(), read);
+  ASSERT_TRUE(status.ok()) << status.message();
+  const StreamContent want = example_content();
+  EXPECT_EQ(read.flags, want.flags);
+  EXPECT_EQ(read.vertex_count, want.vertex_count);
+  EXPECT_EQ(read.welded_index, want.welded_index);
+  EXPECT_EQ(read.welded_count, want.welded_count);
+  EXPECT_EQ(read.clip_frames, want.clip_frames);
+  EXPECT_EQ(read.cluster_count, want.cluster_count);
+  EXPECT_EQ(read.labels, want.labels);
+  EXPECT_EQ(read.linear_step, want.linear_step);
+  EXPECT_EQ(read.translation_step, want.translation_step);
+  EXPECT_EQ(read.motion, want.motion);
+  EXPECT_EQ(read.weight_bits, want.weight_bits);
+  EXPECT_EQ(read.weight_offset, want.weight_offset);
+  EXPECT_EQ(read.weight_cluster, want.weight_cluster);
+  EXPECT_EQ(read.weight_value, want.weight_value);
+  for (int axis = 0; axis < 3; ++axis) EXPECT_EQ(read.residual_step[axis], want.residual_step[axis]);
+  EXPECT_EQ(read.residuals, want.residuals);
+}
+
+TEST(StreamExample, DecodesToTheAppendixFrames) {
+  const std::vector<uint8_t> bytes = written();
+  std::vector<FrameSequence> clips;
+  const Status status = decode_animation(bytes.data(), bytes.size(), example_base(), example_triangles(), clips);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(clips.size(), 2u);
+  ASSERT_EQ(clips[0].frame_count, 2u);
+  ASSERT_EQ(clips[1].frame_count, 1u);
+  for (size_t frame = 0; frame < 3; ++frame) {
+    const FrameSequence& clip = clips[frame < 2 ? 0 : 1];
+    const float* positions = clip.frame(frame < 2 ? frame : 0);
+    for (size_t v = 0; v < 8; ++v)
+      for (size_t axis = 0; axis < 3; ++axis) {
+        uint32_t bits;
+        std::memcpy(&bits, &positions[v * 3 + axis], 4);
+        EXPECT_EQ(bits, kExampleFrames[frame][v][axis]) << "frame " << frame << ", vertex " << v << ", axis " << axis;
+      }
+  }
+}
+
+}  // namespace
+}  // namespace segmorph
