@@ -15,10 +15,14 @@ uint32_t coordinate_bits(float x) {
   return bits == 0x80000000u ? 0u : bits;
 }
 
+uint32_t raw_bits(float x) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof(bits));
+  return bits;
+}
+
 bool same_trajectory(const std::vector<FrameSequence>& clips, const float* also, uint32_t a, uint32_t b) {
-  if (also)
-    for (int c = 0; c < 3; ++c)
-      if (coordinate_bits(also[a * 3 + c]) != coordinate_bits(also[b * 3 + c])) return false;
+  if (also && std::memcmp(&also[a * 3], &also[b * 3], 3 * sizeof(float)) != 0) return false;  // bits: +0 ≠ −0
   for (const FrameSequence& clip : clips)
     for (size_t f = 0; f < clip.frame_count; ++f) {
       const float* frame = clip.frame(f);
@@ -55,7 +59,7 @@ WeldedTopology weld_topology(const std::vector<FrameSequence>& clips, const std:
   if (also)
     for (size_t v = 0; v < vertex_count; ++v)
       for (int c = 0; c < 3; ++c) {
-        hash[v] ^= coordinate_bits(also[v * 3 + c]);
+        hash[v] ^= raw_bits(also[v * 3 + c]);
         hash[v] *= 1099511628211ull;
       }
   for (const FrameSequence& clip : clips)

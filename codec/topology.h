@@ -40,8 +40,8 @@ VertexAdjacency vertex_adjacency(const WeldedTopology& topology);
 // Welds the vertices of one primitive over all of its clips. Every clip must have the same vertex
 // count and triangles (they are samples of the same primitive); there must be at least one clip.
 // Vertices no triangle uses are components of their own. With `also_equal` (V × 3 positions), vertices weld only
-// where these are bit-identical too: the encoder passes the decoder's base mesh, whose groups of identical
-// positions the stream's welding refers to (a lossy base may separate vertices whose frames are equal).
+// where these are bit-identical too (+0 and −0 differ here): the encoder passes the decoder's base mesh, whose groups
+// of identical positions the stream's welding refers to (a lossy base may separate vertices whose frames are equal).
 WeldedTopology weld_topology(const std::vector<FrameSequence>& clips, const std::vector<float>* also_equal = nullptr);
 
 }  // namespace segmorph
