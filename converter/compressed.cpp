@@ -173,8 +173,16 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
                                                  ? writer.add_described(attribute.values.data(), decoded.vertex_count, type)
                                                  : writer.add_zeros(decoded.vertex_count, type, false);
       }
-      // No indices accessor: the triangles are Draco's (KHR_draco_mesh_compression makes it optional), and
-      // tinygltf 2.7 refuses to load an indices accessor without a bufferView.
+      // The indices accessor describes Draco's triangles and has no bufferView, as KHR_draco_mesh_compression
+      // asks (validators warn about a TRIANGLES primitive whose vertex count is not a multiple of 3 without
+      // one). tinygltf 2.7 refuses such accessors; load_gltf drops them before it parses (json_prepass.h).
+      tinygltf::Accessor indices;
+      indices.componentType =
+          decoded.vertex_count <= 65535 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+      indices.count = decoded.triangles.size();
+      indices.type = TINYGLTF_TYPE_SCALAR;
+      model.accessors.push_back(indices);
+      out.indices = int(model.accessors.size()) - 1;
       draco_primitive.buffer_view = writer.add_view(draco_bytes.data(), draco_bytes.size(), 0);
       out.extensions[kDracoExtensionName] = draco_primitive_value(draco_primitive);
       CompressedPrimitive with_stream = compressed;
