@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "range_coder.h"
+#include "residual_coding.h"
 #include "stream_format.h"
 
 namespace segmorph {
@@ -38,17 +39,8 @@ struct Models {
   std::array<SignedModel, 12> motion;  // per coefficient slot, deltas from the previous frame
   BitTreeModel extra_count{2};         // extra clusters per vertex (0..3)
   SignedModel weight;
-  // Residuals by axis and by the magnitude of the same vertex's symbol in the previous frame (0, 1, more).
-  std::array<SignedModel, 9> residual;
-  std::array<UnsignedModel, 3> lossless_escape;
+  // The residuals' models are residual_coding.cpp's.
 };
-
-int residual_context(size_t axis, int64_t previous) {
-  const int64_t magnitude = previous < 0 ? -previous : previous;
-  return int(axis) * 3 + int(std::min<int64_t>(magnitude, 2));
-}
-
-constexpr int32_t kEscape = INT32_MIN;  // a lossless difference outside int32 follows as two 32-bit halves
 
 }  // namespace
 
@@ -152,21 +144,7 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
 
   const bool lossless = content.flags & format::kFlagLossless;
   for (int axis = 0; axis < 3; ++axis) encoder.encode_direct_bits(float_bits(content.residual_step[axis]), 32);
-  const size_t row = size_t(content.welded_count) * 3;
-  for (size_t index = 0; index < content.residuals.size(); ++index) {
-    const size_t axis = index % 3;
-    const int64_t previous = index >= row ? content.residuals[index - row] : 0;
-    const int64_t value = content.residuals[index];
-    SignedModel& model = models.residual[size_t(residual_context(axis, previous))];
-    if (!lossless || (value > kEscape && value <= INT32_MAX)) {
-      model.encode(encoder, int32_t(value));
-    } else {
-      model.encode(encoder, kEscape);
-      const uint64_t bits = uint64_t(value);
-      encoder.encode_direct_bits(uint32_t(bits >> 32), 32);
-      encoder.encode_direct_bits(uint32_t(bits), 32);
-    }
-  }
+  if (!content.residuals.empty()) encode_residuals(encoder, content.residuals, content.welded_count, lossless);
   encoder.finish();
   const uint32_t length = uint32_t(out.size() - length_at - 4);
   for (int i = 0; i < 4; ++i) out[length_at + size_t(i)] = uint8_t(length >> (8 * i));
@@ -285,20 +263,8 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
     if (!lossless && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
       return corrupt("bad residual quantizer step");
   }
-  const size_t row = size_t(content.welded_count) * 3;
-  content.residuals.resize(frames * row);
-  for (size_t index = 0; index < content.residuals.size(); ++index) {
-    const int64_t previous = index >= row ? content.residuals[index - row] : 0;
-    SignedModel& model = models.residual[size_t(residual_context(index % 3, previous))];
-    int64_t value = model.decode(decoder);
-    if (value == kEscape) {
-      if (!lossless) return corrupt("escape in a lossy stream");
-      const uint64_t high = decoder.decode_direct_bits(32), low = decoder.decode_direct_bits(32);
-      value = int64_t((high << 32) | low);
-    }
-    content.residuals[index] = value;
-    if ((index & 0xffff) == 0 && decoder.failed()) return decoder.finish();
-  }
+  content.residuals.resize(frames * content.welded_count * 3);
+  SEGMORPH_RETURN_IF_ERROR(decode_residuals(decoder, content.welded_count, lossless, content.residuals));
   return decoder.finish();
 }
 

@@ -18,8 +18,8 @@ namespace segmorph {
 namespace {
 
 constexpr char kExampleHex[] =
-    "53474d41010646000000100445d5db1a3c8ed7bc141eada18000000037ee2e161dd2d2d31f1aaf4c3e8b4fa4457ea8dd"
-    "3449f56ffaa1356ffcb1f97f0355918b25ccce41daf691a585dd2ebd1085164c";
+    "53474d4101063e000000100445d5db1a3c8ed7bc141eada18000000037ee2e161dd2d2d31f1aaf4c3e8b4fa4457ea8dd"
+    "3449f56ffaa1356ffcb1f97f6a474ecd6c2ad438a41450d2";
 
 // Base positions (V = 8): a strip of two unit squares, with vertex 6 a seam copy of vertex 4 (welded) and
 // vertex 7 a copy of vertex 2 that moves on its own (not welded).

@@ -1,0 +1,34 @@
+// Entropy coding of the residual section of a stream: the F × W × 3 residual symbols, in the stream's one range
+// coder (spec/entropy-coding.md, section 8, is the bit-exact description).
+//
+// Most residuals are 0 or ±1, and a vertex's three are often all zero. So each (frame, welded vertex) starts with
+// one bit "some residual of this vertex is nonzero"; then each axis codes a nonzero flag (implied for the last axis
+// when the first two are zero), a sign, and the magnitude in unary up to 2 (two bits) with an adaptive Exp-Golomb
+// escape (UnsignedModel) for magnitudes of 3 and more. Contexts come from the residuals at the same vertex and axis
+// in the three previous frames (and, for the nonzero flag, from the earlier axes of the same vertex). A 0 costs at
+// most one binary decision and ±1 three, plus the vertex bit shared by three residuals, against 1 and 8 with a
+// SignedModel; the decoder's time goes into these decisions, the unpredictable ones above all.
+//
+// In a lossless stream a residual outside int32, and INT32_MIN itself, is coded as the symbol INT32_MIN (the
+// escape) followed by its 64 bits as direct bits, high half first.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "range_coder.h"
+#include "status.h"
+
+namespace segmorph {
+
+// Appends the residual symbols to the encoder's stream. residuals: F × W × 3, frame by frame, welded vertex by
+// vertex, x y z (StreamContent::residuals); welded_count: W ≥ 1. Lossy residuals must lie in (INT32_MIN, INT32_MAX].
+void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residuals, size_t welded_count, bool lossless);
+
+// Decodes residuals.size() symbols (F × W × 3, sized by the caller) written by encode_residuals. Returns bad_data,
+// and stops early, once the stream is known to be bad (an escape in a lossy stream, a magnitude outside int32, a
+// non-canonical escape, or running past the end of the stream); the caller still calls decoder.finish() at the end.
+Status decode_residuals(RangeDecoder& decoder, size_t welded_count, bool lossless, std::vector<int64_t>& residuals);
+
+}  // namespace segmorph
