@@ -19,6 +19,9 @@ int type_of_components(int components) {
   }
 }
 
+// The codec's error target relative to the user's (see compress_model).
+constexpr double kErrorTargetMargin = 0.99;
+
 // Draco position bits when none are given: the base mesh's quantization step (its largest extent over 2^bits)
 // about kBaseStepRatio times the residual step the error target implies, and at least kMinPositionBits. The
 // animation's closed loop corrects the base mesh's error in every frame, so the base need not be much finer
@@ -78,7 +81,10 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
           tinygltf::AnimationSampler hold;
           hold.input = sampler.input;
           hold.interpolation = "STEP";
-          hold.output = writer.add_floats(translation.data(), frames, TINYGLTF_TYPE_VEC3, false, 0);
+          // A node at the origin (the usual case) holds zeros, which need no data.
+          const bool zero = std::all_of(translation.begin(), translation.end(), [](float x) { return x == 0; });
+          hold.output = zero ? writer.add_zeros(frames, TINYGLTF_TYPE_VEC3, false)
+                             : writer.add_floats(translation.data(), frames, TINYGLTF_TYPE_VEC3, false, 0);
           animation.samplers.push_back(hold);
           tinygltf::AnimationChannel placeholder;
           placeholder.sampler = int(animation.samplers.size()) - 1;
@@ -141,6 +147,10 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       // The animation, against the base positions the decoder will have.
       CodecSettings primitive_settings = settings;
       primitive_settings.outside_bytes += draco_bytes.size();
+      // The codec meets its error target on the frames it is given, in Draco's vertex order; verify measures
+      // the decoded file against the original, where vertices Draco merged count once each and the morph-target
+      // form adds its rounding (measured: up to 0.3 % above on the samples). Aim a little lower.
+      if (settings.mode == RateMode::error) primitive_settings.target *= kErrorTargetMargin;
       std::vector<uint8_t> stream;
       EncodeReport encode_report;
       std::vector<FrameSequence> reconstruction, check;

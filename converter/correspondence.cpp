@@ -1,6 +1,7 @@
 #include "correspondence.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <unordered_map>
 
@@ -8,7 +9,9 @@
 
 namespace segmorph {
 
-std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference, const std::vector<FrameSequence>& other) {
+std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference,
+                                     const std::vector<FrameSequence>& other) {
+  assert(!reference.empty() && reference.size() == other.size() && other[0].vertex_count > 0);
   const size_t count = reference[0].vertex_count, other_count = other[0].vertex_count;
   std::vector<uint32_t> match(count);
   const float* first = reference[0].frame(0);
@@ -19,67 +22,76 @@ std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference
   }
 
   // A grid of the other's first-frame positions, cells about the mean spacing of the vertices.
-  const double diagonal = std::max(bounding_box_diagonal(first, count), 1e-30);
-  const double cell = diagonal / std::max(1.0, std::cbrt(double(other_count)));
-  auto index = [&](double x) { return int64_t(std::floor(x / cell)); };
+  const double diagonal = bounding_box_diagonal(other_first, other_count);
+  const double cell = diagonal > 0 ? diagonal / std::max(1.0, std::cbrt(double(other_count))) : 1.0;
+  // Clamped so that far outliers cannot overflow; clamping only brings a point nearer the grid's box.
+  auto index = [&](double x) { return int64_t(std::clamp(std::floor(x / cell), -1e15, 1e15)); };
   auto key = [](int64_t x, int64_t y, int64_t z) {
     return uint64_t(x * 73856093) ^ uint64_t(y * 19349663) ^ uint64_t(z * 83492791);
   };
   std::unordered_multimap<uint64_t, uint32_t> grid;
   grid.reserve(other_count);
-  for (uint32_t u = 0; u < other_count; ++u)
-    grid.emplace(key(index(other_first[u * 3]), index(other_first[u * 3 + 1]), index(other_first[u * 3 + 2])), u);
+  int64_t low[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, high[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+  for (uint32_t u = 0; u < other_count; ++u) {
+    int64_t cell_index[3];
+    for (int k = 0; k < 3; ++k) {
+      cell_index[k] = index(other_first[u * 3 + size_t(k)]);
+      low[k] = std::min(low[k], cell_index[k]);
+      high[k] = std::max(high[k], cell_index[k]);
+    }
+    grid.emplace(key(cell_index[0], cell_index[1], cell_index[2]), u);
+  }
 
   auto distance2 = [](const float* a, const float* b) {
     double sum = 0;
     for (int c = 0; c < 3; ++c) sum += (double(a[c]) - b[c]) * (double(a[c]) - b[c]);
     return sum;
   };
-  auto trajectory_distance = [&](uint32_t v, uint32_t u) {
+  // The trajectory distance of v and u, or a value >= bound as soon as it is known to reach it.
+  auto trajectory_distance = [&](uint32_t v, uint32_t u, double bound) {
     double sum = 0;
     for (size_t c = 0; c < reference.size(); ++c)
-      for (size_t f = 0; f < reference[c].frame_count; ++f)
+      for (size_t f = 0; f < reference[c].frame_count; ++f) {
         sum += distance2(reference[c].frame(f) + v * 3, other[c].frame(f) + u * 3);
+        if (sum >= bound) return sum;
+      }
     return sum;
   };
-  const double tie = 1e-4 * diagonal;
-  std::vector<uint32_t> candidates;
   for (uint32_t v = 0; v < count; ++v) {
     const float* p = first + v * 3;
-    const int64_t cx = index(p[0]), cy = index(p[1]), cz = index(p[2]);
-    double nearest = INFINITY;
-    // Search shells of cells outwards until the nearest found is closer than the next shell can be.
-    for (int64_t radius = 0; radius <= 1 << 20; ++radius) {
-      if (std::isfinite(nearest) && std::sqrt(nearest) + tie < (double(radius) - 1) * cell) break;
-      for (int64_t dx = -radius; dx <= radius; ++dx)
-        for (int64_t dy = -radius; dy <= radius; ++dy)
-          for (int64_t dz = -radius; dz <= radius; ++dz) {
-            if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != radius) continue;
-            const auto range = grid.equal_range(key(cx + dx, cy + dy, cz + dz));
-            for (auto it = range.first; it != range.second; ++it) nearest = std::min(nearest, distance2(p, other_first + it->second * 3));
+    const int64_t centre[3] = {index(p[0]), index(p[1]), index(p[2])};
+    // Shells of cells outwards, from the first that meets the grid's box to the last: a vertex in shell r
+    // is at least (r - 1) cells away in the first frame alone, so the search also ends once that exceeds
+    // the best trajectory distance found. Only the part of a shell inside the box is visited.
+    int64_t near_shell = 0, far_shell = 0, from[3], to[3];
+    for (int k = 0; k < 3; ++k) {
+      near_shell = std::max({near_shell, low[k] - centre[k], centre[k] - high[k]});
+      far_shell = std::max({far_shell, centre[k] - low[k], high[k] - centre[k]});
+    }
+    double best = INFINITY;
+    uint32_t best_u = 0;
+    auto visit = [&](int64_t dx, int64_t dy, int64_t dz) {
+      const auto range = grid.equal_range(key(centre[0] + dx, centre[1] + dy, centre[2] + dz));
+      for (auto it = range.first; it != range.second; ++it) {
+        const double d = trajectory_distance(v, it->second, best);
+        if (d < best) best = d, best_u = it->second;
+      }
+    };
+    for (int64_t radius = near_shell; radius <= far_shell; ++radius) {
+      if (std::isfinite(best) && (double(radius) - 1) * cell > std::sqrt(best)) break;
+      for (int k = 0; k < 3; ++k)
+        from[k] = std::max(-radius, low[k] - centre[k]), to[k] = std::min(radius, high[k] - centre[k]);
+      for (int64_t dx = from[0]; dx <= to[0]; ++dx)
+        for (int64_t dy = from[1]; dy <= to[1]; ++dy) {
+          if (std::abs(dx) == radius || std::abs(dy) == radius) {
+            for (int64_t dz = from[2]; dz <= to[2]; ++dz) visit(dx, dy, dz);
+          } else {
+            if (from[2] == -radius) visit(dx, dy, -radius);
+            if (to[2] == radius) visit(dx, dy, radius);
           }
-      if (radius > 2 && !std::isfinite(nearest) && double(radius) * cell > 4 * diagonal) break;
-    }
-    // Among the (nearly) nearest, the best trajectory.
-    candidates.clear();
-    const double limit = std::pow(std::sqrt(nearest) + tie, 2);
-    const int64_t reach = int64_t(std::ceil((std::sqrt(nearest) + tie) / cell)) + 1;
-    for (int64_t dx = -reach; dx <= reach; ++dx)
-      for (int64_t dy = -reach; dy <= reach; ++dy)
-        for (int64_t dz = -reach; dz <= reach; ++dz) {
-          const auto range = grid.equal_range(key(cx + dx, cy + dy, cz + dz));
-          for (auto it = range.first; it != range.second; ++it)
-            if (distance2(p, other_first + it->second * 3) <= limit) candidates.push_back(it->second);
         }
-    uint32_t best = candidates.empty() ? 0 : candidates[0];
-    double best_distance = INFINITY;
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-    for (uint32_t u : candidates) {
-      const double d = candidates.size() == 1 ? 0 : trajectory_distance(v, u);
-      if (d < best_distance) best_distance = d, best = u;
     }
-    match[v] = best;
+    match[v] = best_u;
   }
   return match;
 }

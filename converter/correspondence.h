@@ -1,5 +1,5 @@
 // Which vertex of one sampling of a primitive is which vertex of another (a compressed file's vertices come
-// back in another order, and encoders may merge duplicates).
+// back in another order, and encoders may merge duplicates or drop unused vertices).
 #pragma once
 
 #include <cstdint>
@@ -9,10 +9,12 @@
 
 namespace segmorph {
 
-// For each vertex of `reference` (clips of one primitive), the vertex of `other` (the same clips, any vertex
-// order and count) that is nearest in the first frame; where several are about as near (within 1e-4 of the
-// bounding-box diagonal), the one whose whole trajectory is nearest. Identity when the two have the same
-// vertex count and first frame.
-std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference, const std::vector<FrameSequence>& other);
+// For each vertex of `reference` (clips of one primitive), the vertex of `other` (the same clips sampled at
+// the same times, any vertex order and count, at least one vertex) whose trajectory is nearest: the least
+// sum of squared distances over every frame of every clip. That is the pairing under which the other's
+// error is smallest, so quantization that moves vertices past their neighbours cannot mislead it (a nearest
+// first frame would). Identity when the two have the same vertex count and first frame.
+std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference,
+                                     const std::vector<FrameSequence>& other);
 
 }  // namespace segmorph

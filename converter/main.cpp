@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "bake.h"
+#include "comparison.h"
 #include "compressed.h"
-#include "correspondence.h"
 #include "metrics.h"
 #include "gltf_io.h"
 #include "sample.h"
@@ -35,8 +35,10 @@ const char* const kUsage =
     "  decode IN -o OUT\n"
     "      Restore standard glTF morph targets (the form bake writes) from an encoded file.\n"
     "  verify ORIGINAL COMPRESSED [--json]\n"
-    "      Compare the animation of two files (either may be encoded, baked or original): bytes, bits per\n"
-    "      vertex per frame, KG error, RMSE and maximum error over the bounding-box diagonal.\n"
+    "      Compare the animation of two files (either may be encoded, baked, original or written by another\n"
+    "      tool: primitives and vertices are paired by trajectory, COMPRESSED is sampled at ORIGINAL's frame\n"
+    "      times): bytes, bits per vertex per frame, KG error, RMSE and maximum error over the bounding-box\n"
+    "      diagonal.\n"
     "\n"
     "Options:\n"
     "  -o, --output FILE  output file (.glb: binary; .gltf: JSON with FILE's name .bin beside it)\n"
@@ -46,7 +48,8 @@ const char* const kUsage =
     "  --bpvf R           encode: target bits per vertex per frame of the whole output\n"
     "  --lossless         encode: restore the sampled frames bit for bit\n"
     "  --clusters K       encode: number of motion clusters (default: automatic)\n"
-    "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 30 (default 14)\n"
+    "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 30 (default: from\n"
+    "                     the error target, at least 12; 14 with --bpvf or --lossless)\n"
     "  --json             info, encode, verify: print one JSON object instead of text\n"
     "  -q, --quiet        no progress messages on stderr\n"
     "  -h, --help         this help\n"
@@ -97,29 +100,29 @@ std::string json_string(const std::string& s) {
   return out + "\"";
 }
 
-std::string node_name(const tinygltf::Model& model, int node) {
-  const std::string& name = model.nodes[size_t(node)].name;
-  return name.empty() ? "node " + std::to_string(node) : name;
-}
-
 // A file loaded, analyzed and sampled. Not copyable: sampled nodes point into scene.
 struct SampledFile {
   tinygltf::Model model;
   Scene scene;
-  std::vector<SampledNode> sampled;
+  std::vector<SampledNode> sampled;  // empty after load_and_analyze alone
   DecodedSizes decoded;  // what an encoded file held
 };
 
-Status load_and_sample(const std::string& path, const Options& options, SampledFile& file) {
-  tinygltf::Model& model = file.model;
-  Scene& scene = file.scene;
-  std::vector<SampledNode>& sampled = file.sampled;
+// Reads `path`, decodes what is encoded and finds the animated nodes.
+Status load_and_analyze(const std::string& path, const Options& options, SampledFile& file) {
   progress(options, "reading " + path);
   std::vector<std::string> warnings;
-  SEGMORPH_RETURN_IF_ERROR(load_gltf(path, model, &warnings));
+  SEGMORPH_RETURN_IF_ERROR(load_gltf(path, file.model, &warnings));
   for (const std::string& warning : warnings) progress(options, "warning: " + path + ": " + warning);
-  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(model, &file.decoded));
-  SEGMORPH_RETURN_IF_ERROR(analyze_scene(model, scene));
+  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(file.model, &file.decoded));
+  return analyze_scene(file.model, file.scene);
+}
+
+Status load_and_sample(const std::string& path, const Options& options, SampledFile& file) {
+  SEGMORPH_RETURN_IF_ERROR(load_and_analyze(path, options, file));
+  const tinygltf::Model& model = file.model;
+  const Scene& scene = file.scene;
+  std::vector<SampledNode>& sampled = file.sampled;
   sampled.resize(scene.animated.size());
   for (size_t i = 0; i < scene.animated.size(); ++i) {
     const AnimatedNode& node = scene.animated[i];
@@ -295,60 +298,32 @@ int run_verify(const Options& options) {
   SampledFile original, compressed;
   Status status = load_and_sample(options.inputs[0], options, original);
   if (!status.ok()) return fail(options.inputs[0], status);
-  status = load_and_sample(options.inputs[1], options, compressed);
+  status = load_and_analyze(options.inputs[1], options, compressed);
+  AnimationComparison comparison;
+  if (status.ok()) {
+    progress(options, "comparing at the frame times of " + options.inputs[0]);
+    status = compare_animation(original.model, original.scene, original.sampled, compressed.model, compressed.scene,
+                               comparison);
+  }
   if (!status.ok()) return fail(options.inputs[1], status);
 
-  ErrorMetrics worst;
-  double vertex_frames = 0;
-  size_t vertices = 0, frames = 0;
-  for (const SampledNode& want : original.sampled) {
-    const SampledNode* got = nullptr;
-    for (const SampledNode& candidate : compressed.sampled) {
-      const int source = source_node(compressed.model.nodes[size_t(candidate.node->node)]);
-      if ((source >= 0 ? source : candidate.node->node) == want.node->node) got = &candidate;
-    }
-    const std::string node_label = node_name(original.model, want.node->node);
-    if (!got) return fail(options.inputs[1], Status(StatusCode::bad_data, "has no animation for " + node_label));
-    if (got->primitives.size() != want.primitives.size() || got->node->clips.size() != want.node->clips.size())
-      return fail(options.inputs[1], Status(StatusCode::bad_data, node_label + ": primitives or clips differ"));
-    for (size_t p = 0; p < want.primitives.size(); ++p) {
-      ErrorAccumulator accumulator;
-      // The compressed file's vertices in the original's order.
-      const std::vector<uint32_t> match = match_vertices(want.primitives[p].clips, got->primitives[p].clips);
-      for (size_t c = 0; c < want.primitives[p].clips.size(); ++c) {
-        const FrameSequence& a = want.primitives[p].clips[c];
-        const FrameSequence& other = got->primitives[p].clips[c];
-        FrameSequence b = a;
-        if (other.frame_count == a.frame_count)
-          for (size_t f = 0; f < a.frame_count; ++f)
-            for (size_t v = 0; v < a.vertex_count; ++v)
-              for (int k = 0; k < 3; ++k) b.frame(f)[v * 3 + size_t(k)] = other.frame(f)[size_t(match[v]) * 3 + size_t(k)];
-        if (other.frame_count != a.frame_count || a.times != other.times)
-          return fail(options.inputs[1], Status(StatusCode::bad_data, node_label + ": frame times differ"));
-        accumulator.add(a, b);
-        vertex_frames += double(a.vertex_count * a.frame_count);
-        if (vertices == 0) frames += a.frame_count;  // frames of every clip, counted on the first primitive
-      }
-      vertices += want.primitives[p].clips[0].vertex_count;
-      const ErrorMetrics metrics = accumulator.result();
-      worst.kg_percent = std::max(worst.kg_percent, metrics.kg_percent);
-      worst.rmse_over_diagonal = std::max(worst.rmse_over_diagonal, metrics.rmse_over_diagonal);
-      worst.max_error_over_diagonal = std::max(worst.max_error_over_diagonal, metrics.max_error_over_diagonal);
-    }
-  }
+  const ErrorMetrics& worst = comparison.worst;
+  const double vertex_frames = comparison.vertex_frames;
   const size_t bytes = file_bytes(options.inputs[1], compressed.model);
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
   const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(compressed.decoded.animation_bytes) / vertex_frames : 0;
   if (options.json) {
-    std::printf("{\"original\":%s,\"compressed\":%s,\"vertices\":%zu,\"frames\":%zu,\"bytes\":%zu,\"bpvf\":%.4f,"
-                "\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,\"rmse_over_diag\":%.6g,\"max_error_over_diag\":%.6g}\n",
-                json_string(options.inputs[0]).c_str(), json_string(options.inputs[1]).c_str(), vertices, frames, bytes,
-                bpvf, bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal, worst.max_error_over_diagonal);
+    std::printf("{\"original\":%s,\"compressed\":%s,\"vertices\":%zu,\"frames\":%zu,\"vertex_frames\":%.0f,"
+                "\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,\"rmse_over_diag\":%.6g,"
+                "\"max_error_over_diag\":%.6g}\n",
+                json_string(options.inputs[0]).c_str(), json_string(options.inputs[1]).c_str(), comparison.vertices,
+                comparison.frames, vertex_frames, bytes, bpvf, bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal,
+                worst.max_error_over_diagonal);
   } else {
     std::printf("%s against %s: %zu vertices, %zu frames, %zu bytes, %.3f bpvf (animation %.3f), KG %.4f %%, "
                 "RMSE %.3g and max error %.3g of the diagonal\n",
-                options.inputs[1].c_str(), options.inputs[0].c_str(), vertices, frames, bytes, bpvf, bpvf_animation,
-                worst.kg_percent, worst.rmse_over_diagonal, worst.max_error_over_diagonal);
+                options.inputs[1].c_str(), options.inputs[0].c_str(), comparison.vertices, comparison.frames, bytes, bpvf,
+                bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal, worst.max_error_over_diagonal);
   }
   return 0;
 }

@@ -1,6 +1,7 @@
 #include "sample.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 #include "accessor.h"
@@ -144,6 +145,11 @@ Status read_skin_influences(const tinygltf::Model& model, const tinygltf::Primit
 
 }  // namespace
 
+std::string node_name(const tinygltf::Model& model, int node) {
+  const std::string& name = model.nodes[size_t(node)].name;
+  return name.empty() ? "node " + std::to_string(node) : name;
+}
+
 std::string AnimatedNode::kind() const {
   if (weights_animated && skin_animated) return "morph+skinned";
   if (skin_animated) return "skinned";
@@ -217,7 +223,8 @@ std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model,
 }
 
 Status sample_node(const tinygltf::Model& model, const Scene& scene, const AnimatedNode& node,
-                   const SampleSettings& settings, SampledNode& out) {
+                   const SampleSettings& settings, SampledNode& out, const std::vector<std::vector<float>>* clip_times) {
+  assert(!clip_times || clip_times->size() == node.clips.size());
   out = SampledNode();
   out.node = &node;
   const tinygltf::Node& gltf_node = model.nodes[size_t(node.node)];
@@ -310,7 +317,7 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
   std::vector<double> weights(target_count), morphed;
   for (size_t c = 0; c < node.clips.size(); ++c) {
     const Clip& clip = scene.clips[size_t(node.clips[c])];
-    const std::vector<float> times = frame_times(scene, model, node, node.clips[c], settings);
+    const std::vector<float> times = clip_times ? (*clip_times)[c] : frame_times(scene, model, node, node.clips[c], settings);
     const Track* weight_track = nullptr;
     bool step = true;
     for_each_moving_track(model, scene.graph, node, clip, [&](const Track& track) {

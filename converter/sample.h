@@ -33,6 +33,9 @@ struct Scene {
   std::vector<AnimatedNode> animated;  // in node order
 };
 
+// The name of node `node` of `model`, or "node N" when it has none.
+std::string node_name(const tinygltf::Model& model, int node);
+
 // Reads the animations and finds the animated nodes. Fails with nothing_to_do when nothing moves vertices.
 Status analyze_scene(const tinygltf::Model& model, Scene& scene);
 
@@ -64,8 +67,11 @@ std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model,
                                int clip, const SampleSettings& settings);
 
 // Samples every primitive of `node` over its clips. Positions are in the node's mesh space for morph-only
-// nodes and in model (world) space for skinned ones, as glTF renders them.
+// nodes and in model (world) space for skinned ones, as glTF renders them. `clip_times`, when given, holds
+// per entry of node.clips the times to sample at instead of frame_times() (verify samples a second file
+// at the first one's frame times).
 Status sample_node(const tinygltf::Model& model, const Scene& scene, const AnimatedNode& node,
-                   const SampleSettings& settings, SampledNode& out);
+                   const SampleSettings& settings, SampledNode& out,
+                   const std::vector<std::vector<float>>* clip_times = nullptr);
 
 }  // namespace segmorph

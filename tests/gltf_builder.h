@@ -58,6 +58,16 @@ class GltfBuilder {
     return add_integers(values, type, component_type, false);
   }
 
+  // A SHORT accessor, not normalized: KHR_mesh_quantization's integer positions and morph deltas.
+  int add_shorts(const std::vector<int>& values, int type) {
+    std::vector<uint32_t> bits;
+    for (int v : values) {
+      assert(v >= INT16_MIN && v <= INT16_MAX);
+      bits.push_back(uint16_t(int16_t(v)));  // two's complement, stored little-endian by add_integers
+    }
+    return add_integers(bits, type, TINYGLTF_COMPONENT_TYPE_SHORT, false);
+  }
+
   // A normalized unsigned accessor (weights): `raw` are the stored integers, read as raw / 255 for
   // UNSIGNED_BYTE and raw / 65535 for UNSIGNED_SHORT.
   int add_normalized(const std::vector<uint32_t>& raw, int type, int component_type) {
@@ -211,8 +221,10 @@ class GltfBuilder {
 
   static size_t component_bytes(int component_type) {
     switch (component_type) {
+      case TINYGLTF_COMPONENT_TYPE_BYTE:
       case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
         return 1;
+      case TINYGLTF_COMPONENT_TYPE_SHORT:
       case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
         return 2;
       case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:

@@ -44,11 +44,10 @@
 // was compared although ORIGINAL has deforming animation), 2 on usage or load
 // errors.
 
-import { readFile } from 'node:fs/promises';
-import path from 'node:path';
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
+import { glbBytes, readAsset } from './glb.mjs';
 
 const USAGE =
   'usage: node compare_three.mjs ORIGINAL BAKED [--tolerance 1e-5] [--json] [--self] ' +
@@ -87,53 +86,6 @@ function parseArgs(argv) {
 }
 
 // ---------------------------------------------------------------- loading
-
-const GLB_MAGIC = 0x46546c67; // 'glTF'
-const CHUNK_JSON = 0x4e4f534a;
-const CHUNK_BIN = 0x004e4942;
-
-// Reads a .glb or .gltf file: the JSON and the bytes of every buffer
-// (null for a buffer without data, e.g. an EXT_meshopt_compression fallback).
-async function readAsset(file) {
-  const bytes = await readFile(file);
-  const dir = path.dirname(path.resolve(file));
-  let json;
-  let glbBin = null;
-  if (bytes.length >= 12 && bytes.readUInt32LE(0) === GLB_MAGIC) {
-    const length = Math.min(bytes.readUInt32LE(8), bytes.length);
-    for (let offset = 12; offset + 8 <= length; ) {
-      const chunkLength = bytes.readUInt32LE(offset);
-      const chunkType = bytes.readUInt32LE(offset + 4);
-      const chunk = bytes.subarray(offset + 8, offset + 8 + chunkLength);
-      if (chunkType === CHUNK_JSON && json === undefined) json = JSON.parse(chunk.toString('utf8'));
-      else if (chunkType === CHUNK_BIN && glbBin === null) glbBin = chunk;
-      offset += 8 + chunkLength;
-    }
-    if (json === undefined) throw new Error('GLB without JSON chunk');
-  } else {
-    json = JSON.parse(bytes.toString('utf8').replace(/^\uFEFF/, ''));
-  }
-  const buffers = [];
-  for (const [i, buffer] of (json.buffers || []).entries()) {
-    let data = null;
-    if (buffer.uri === undefined) {
-      if (i === 0 && glbBin !== null) data = glbBin;
-    } else if (buffer.uri.startsWith('data:')) {
-      const comma = buffer.uri.indexOf(',');
-      const payload = buffer.uri.slice(comma + 1);
-      data = /;base64$/i.test(buffer.uri.slice(0, comma))
-        ? Buffer.from(payload, 'base64')
-        : Buffer.from(decodeURIComponent(payload), 'latin1');
-    } else {
-      data = await readFile(path.resolve(dir, decodeURIComponent(buffer.uri)));
-    }
-    if (data !== null && data.length < buffer.byteLength) {
-      throw new Error(`buffer ${i} has ${data.length} bytes, byteLength says ${buffer.byteLength}`);
-    }
-    buffers.push(data === null ? null : data.subarray(0, buffer.byteLength));
-  }
-  return { json, buffers };
-}
 
 const TEXTURE_EXTENSIONS = ['KHR_texture_transform', 'KHR_texture_basisu', 'EXT_texture_webp', 'EXT_texture_avif'];
 
@@ -193,26 +145,9 @@ function buildGlb(json, buffers) {
   }
   if (newBuffers.length > 0) json.buffers = newBuffers;
 
-  const jsonBytes = Buffer.from(JSON.stringify(json), 'utf8');
-  const jsonPadded = Math.ceil(jsonBytes.length / 4) * 4;
-  const binPadded = Math.ceil(binLength / 4) * 4;
-  const total = 12 + 8 + jsonPadded + (newBuffers.length > 0 ? 8 + binPadded : 0);
-  const glb = Buffer.alloc(total);
-  glb.writeUInt32LE(GLB_MAGIC, 0);
-  glb.writeUInt32LE(2, 4);
-  glb.writeUInt32LE(total, 8);
-  glb.writeUInt32LE(jsonPadded, 12);
-  glb.writeUInt32LE(CHUNK_JSON, 16);
-  jsonBytes.copy(glb, 20);
-  glb.fill(0x20, 20 + jsonBytes.length, 20 + jsonPadded);
-  if (newBuffers.length > 0) {
-    const binStart = 20 + jsonPadded;
-    glb.writeUInt32LE(binPadded, binStart);
-    glb.writeUInt32LE(CHUNK_BIN, binStart + 4);
-    for (const { data, offset } of parts) data.copy(glb, binStart + 8 + offset);
-  }
   const bin = new Uint8Array(binLength);
   for (const { data, offset } of parts) bin.set(data, offset);
+  const glb = glbBytes(json, newBuffers.length > 0 ? bin : null);
   return { glb: glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength), bin };
 }
 

@@ -1,0 +1,215 @@
+#include "comparison.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "bake.h"
+#include "correspondence.h"
+
+namespace segmorph {
+namespace {
+
+// The matrix (column-major, homogeneous) from a node's sampling space to model space: sample_node gives
+// skinned vertices in model space and morph-only ones in mesh space.
+Eigen::Matrix4d sampling_to_model(const AnimatedNode& node, const std::vector<Eigen::Matrix4d>& static_global) {
+  return node.skin >= 0 ? Eigen::Matrix4d::Identity() : static_global[size_t(node.node)];
+}
+
+void transform_positions(const Eigen::Matrix4d& transform, std::vector<FrameSequence>& clips) {
+  for (FrameSequence& clip : clips)
+    for (size_t i = 0; i + 2 < clip.positions.size(); i += 3) {
+      float* p = &clip.positions[i];
+      const Eigen::Vector4d moved = transform * Eigen::Vector4d(p[0], p[1], p[2], 1.0);
+      for (int k = 0; k < 3; ++k) p[k] = float(moved[k]);
+    }
+}
+
+// The animation of `other` that plays clip `clip` of `reference`: the one of the same name when exactly one
+// has it, else the one of the same index; -1 when there is none.
+int counterpart_clip(const Scene& reference, int clip, const Scene& other) {
+  const std::string& name = reference.clips[size_t(clip)].name;
+  int found = -1, count = 0;
+  for (size_t c = 0; c < other.clips.size(); ++c)
+    if (other.clips[c].name == name) found = int(c), ++count;
+  if (count == 1) return found;
+  return size_t(clip) < other.clips.size() ? clip : -1;
+}
+
+// Every node of `other` with a mesh, as sample_node takes it: a file that plays the reference's animation may
+// have dropped a track that does not move anything (gltfpack drops constant weights), so nodes that analyze_scene
+// did not find animated are candidates too.
+std::vector<AnimatedNode> mesh_nodes(const tinygltf::Model& model, const Scene& scene) {
+  std::vector<AnimatedNode> nodes;
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    const tinygltf::Node& node = model.nodes[n];
+    if (node.mesh < 0 || model.meshes[size_t(node.mesh)].primitives.empty()) continue;
+    const auto animated = std::find_if(scene.animated.begin(), scene.animated.end(),
+                                       [&](const AnimatedNode& a) { return a.node == int(n); });
+    if (animated != scene.animated.end()) {
+      nodes.push_back(*animated);
+      continue;
+    }
+    AnimatedNode still;  // analyze_scene has checked its mesh and skin indices
+    still.node = int(n);
+    still.mesh = node.mesh;
+    still.skin = node.skin;
+    still.morphed = !model.meshes[size_t(node.mesh)].primitives[0].targets.empty();
+    nodes.push_back(still);
+  }
+  return nodes;
+}
+
+// The node of `nodes` that bake wrote from the reference's node `node` (extras.segmorph.source_node), or null.
+const AnimatedNode* baked_from(int node, const tinygltf::Model& model, const std::vector<AnimatedNode>& nodes) {
+  for (const AnimatedNode& candidate : nodes)
+    if (source_node(model.nodes[size_t(candidate.node)]) == node) return &candidate;
+  return nullptr;
+}
+
+// A node of the other file sampled as the counterpart of a reference node: its clips replaced by the
+// reference's counterparts, its positions carried into the reference's sampling space.
+struct Counterpart {
+  AnimatedNode node;  // sampled.node points here: keep it where it is
+  SampledNode sampled;
+};
+
+Status sample_counterpart(const tinygltf::Model& model, const Scene& scene, const AnimatedNode& node,
+                          const std::vector<int>& clips, const std::vector<std::vector<float>>& times,
+                          const Eigen::Matrix4d& to_reference, Counterpart& out) {
+  out.node = node;
+  out.node.clips = clips;
+  SEGMORPH_RETURN_IF_ERROR(sample_node(model, scene, out.node, SampleSettings(), out.sampled, &times));
+  if (to_reference != Eigen::Matrix4d::Identity())
+    for (SampledPrimitive& primitive : out.sampled.primitives) transform_positions(to_reference, primitive.clips);
+  return Status::Ok();
+}
+
+// How far `other` is from playing `reference`: over up to 32 vertices of the reference, the mean of the
+// least sum of squared distances to a vertex of `other` over the frames `frames` names (per clip, indices
+// into the reference's frames; `other` holds just those frames, in that order). A cheap screen for pairing
+// primitives; match_vertices then pairs the vertices over every frame.
+double trajectory_gap(const std::vector<FrameSequence>& reference, const std::vector<std::vector<size_t>>& frames,
+                      const std::vector<FrameSequence>& other) {
+  const size_t count = reference[0].vertex_count, other_count = other[0].vertex_count;
+  if (other_count == 0) return INFINITY;
+  const size_t samples = std::min<size_t>(count, 32);
+  double total = 0;
+  for (size_t s = 0; s < samples; ++s) {
+    const size_t v = s * count / samples;
+    double nearest = INFINITY;
+    for (size_t u = 0; u < other_count && nearest > 0; ++u) {
+      double sum = 0;
+      for (size_t c = 0; c < frames.size() && sum < nearest; ++c)
+        for (size_t i = 0; i < frames[c].size(); ++i) {
+          const float* a = reference[c].frame(frames[c][i]) + v * 3;
+          const float* b = other[c].frame(i) + u * 3;
+          for (int k = 0; k < 3; ++k) sum += (double(a[k]) - b[k]) * (double(a[k]) - b[k]);
+        }
+      nearest = std::min(nearest, sum);
+    }
+    total += nearest;
+  }
+  return total / double(samples);
+}
+
+}  // namespace
+
+Status compare_animation(const tinygltf::Model& reference_model, const Scene& reference_scene,
+                         const std::vector<SampledNode>& reference, const tinygltf::Model& other_model,
+                         const Scene& other_scene, AnimationComparison& result) {
+  result = AnimationComparison();
+  std::vector<Eigen::Matrix4d> reference_global, other_global;
+  evaluate_global_transforms(reference_model, reference_scene.graph, nullptr, 0, reference_global);
+  evaluate_global_transforms(other_model, other_scene.graph, nullptr, 0, other_global);
+  const std::vector<AnimatedNode> other_nodes = mesh_nodes(other_model, other_scene);
+
+  for (const SampledNode& want : reference) {
+    const AnimatedNode& node = *want.node;
+    const std::string label = node_name(reference_model, node.node);
+    // The other's animations for the reference's clips, sampled at the reference's times.
+    std::vector<int> clips;
+    std::vector<std::vector<float>> times;
+    for (size_t c = 0; c < node.clips.size(); ++c) {
+      const int clip = counterpart_clip(reference_scene, node.clips[c], other_scene);
+      if (clip < 0)
+        return Status(StatusCode::bad_data,
+                      "has no animation \"" + reference_scene.clips[size_t(node.clips[c])].name + "\" for " + label);
+      clips.push_back(clip);
+      times.push_back(want.primitives[0].clips[c].times);
+    }
+    const Eigen::Matrix4d reference_to_model = sampling_to_model(node, reference_global);
+    auto to_reference = [&](const AnimatedNode& other) {
+      const Eigen::Matrix4d other_to_model = sampling_to_model(other, other_global);
+      return other_to_model == reference_to_model ? Eigen::Matrix4d::Identity().eval()
+                                                  : (reference_to_model.inverse() * other_to_model).eval();
+    };
+
+    // Each primitive's counterpart (node, primitive): the baked node's, else the nearest over every node
+    // with a mesh, screened on the first, middle and last frames of the first clips only.
+    std::vector<std::pair<const AnimatedNode*, size_t>> pairs(want.primitives.size(), {nullptr, 0});
+    if (const AnimatedNode* baked = baked_from(node.node, other_model, other_nodes)) {
+      if (other_model.meshes[size_t(baked->mesh)].primitives.size() != want.primitives.size())
+        return Status(StatusCode::bad_data, label + ": the primitives differ");
+      for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {baked, p};
+    } else {
+      std::vector<std::vector<size_t>> screen_frames(times.size());
+      std::vector<std::vector<float>> screen_times(times.size());
+      for (size_t c = 0; c < times.size(); ++c) {
+        const size_t last = times[c].size() - 1;
+        screen_frames[c] = c < 4 ? std::vector<size_t>{0, last / 2, last} : std::vector<size_t>{0};
+        screen_frames[c].erase(std::unique(screen_frames[c].begin(), screen_frames[c].end()), screen_frames[c].end());
+        for (size_t f : screen_frames[c]) screen_times[c].push_back(times[c][f]);
+      }
+      std::vector<double> nearest(want.primitives.size(), INFINITY);
+      for (const AnimatedNode& candidate : other_nodes) {
+        Counterpart screened;
+        SEGMORPH_RETURN_IF_ERROR(sample_counterpart(other_model, other_scene, candidate, clips, screen_times,
+                                                    to_reference(candidate), screened));
+        for (size_t p = 0; p < want.primitives.size(); ++p)
+          for (size_t q = 0; q < screened.sampled.primitives.size(); ++q) {
+            const double gap =
+                trajectory_gap(want.primitives[p].clips, screen_frames, screened.sampled.primitives[q].clips);
+            if (gap < nearest[p]) nearest[p] = gap, pairs[p] = {&candidate, q};
+          }
+      }
+    }
+
+    std::map<const AnimatedNode*, Counterpart> sampled;  // every frame of each node paired with
+    for (size_t p = 0; p < want.primitives.size(); ++p) {
+      if (!pairs[p].first) return Status(StatusCode::bad_data, "has no vertices for " + label);
+      auto it = sampled.find(pairs[p].first);
+      if (it == sampled.end()) {
+        it = sampled.emplace(pairs[p].first, Counterpart()).first;
+        SEGMORPH_RETURN_IF_ERROR(sample_counterpart(other_model, other_scene, *pairs[p].first, clips, times,
+                                                    to_reference(*pairs[p].first), it->second));
+      }
+      const std::vector<FrameSequence>& a = want.primitives[p].clips;
+      const std::vector<FrameSequence>& b = it->second.sampled.primitives[pairs[p].second].clips;
+      if (b[0].vertex_count == 0) return Status(StatusCode::bad_data, "has no vertices for " + label);
+
+      // The other's vertices in the reference's order.
+      const std::vector<uint32_t> match = match_vertices(a, b);
+      ErrorAccumulator accumulator;
+      for (size_t c = 0; c < a.size(); ++c) {
+        FrameSequence matched = a[c];
+        for (size_t f = 0; f < matched.frame_count; ++f)
+          for (size_t v = 0; v < matched.vertex_count; ++v)
+            for (int k = 0; k < 3; ++k)
+              matched.frame(f)[v * 3 + size_t(k)] = b[c].frame(f)[size_t(match[v]) * 3 + size_t(k)];
+        accumulator.add(a[c], matched);
+        result.vertex_frames += double(a[c].vertex_count * a[c].frame_count);
+        if (result.vertices == 0) result.frames += a[c].frame_count;  // counted on the first primitive
+      }
+      result.vertices += a[0].vertex_count;
+      const ErrorMetrics metrics = accumulator.result();
+      result.worst.kg_percent = std::max(result.worst.kg_percent, metrics.kg_percent);
+      result.worst.rmse_over_diagonal = std::max(result.worst.rmse_over_diagonal, metrics.rmse_over_diagonal);
+      result.worst.max_error_over_diagonal =
+          std::max(result.worst.max_error_over_diagonal, metrics.max_error_over_diagonal);
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace segmorph

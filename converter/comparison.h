@@ -1,0 +1,39 @@
+// Measuring the animation of one glTF file against another's (verify): which animated primitive of the
+// other file plays which primitive of the reference, at which times and in which space, and the error
+// metrics over all of them.
+#pragma once
+
+#include <tiny_gltf.h>
+
+#include <cstddef>
+#include <vector>
+
+#include "metrics.h"
+#include "sample.h"
+#include "status.h"
+
+namespace segmorph {
+
+struct AnimationComparison {
+  ErrorMetrics worst;        // per metric, the largest over the reference's animated primitives
+  size_t vertices = 0;       // V of the reference, summed over its animated primitives
+  size_t frames = 0;         // F of the reference's first animated primitive, summed over its clips
+  double vertex_frames = 0;  // V × F summed over the reference's animated primitives and their clips
+};
+
+// Compares `other` (loaded and analyzed into `other_scene`) with the reference file, whose animated nodes
+// are sampled in `reference` (one entry per reference_scene.animated).
+//
+// A reference node's counterpart is the node bake wrote from it (extras.segmorph.source_node); in a file
+// without that provenance, each primitive's counterpart is the primitive of any node with a mesh whose
+// trajectories are nearest (tools such as gltfpack reorder and re-parent nodes, merge primitives, drop
+// vertices and drop tracks that move nothing). It plays the animations of the same names (else the same
+// indices), sampled at the reference's frame times, and its positions are carried into the reference's
+// sampling space through both nodes' static global transforms, which undoes a quantizing tool's
+// dequantization transform (KHR_mesh_quantization). Vertices pair by trajectory (match_vertices). A failed
+// Status is about `other`.
+Status compare_animation(const tinygltf::Model& reference_model, const Scene& reference_scene,
+                         const std::vector<SampledNode>& reference, const tinygltf::Model& other_model,
+                         const Scene& other_scene, AnimationComparison& result);
+
+}  // namespace segmorph

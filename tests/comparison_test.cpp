@@ -1,0 +1,165 @@
+// verify's pairing of two files: vertices by trajectory (match_vertices), primitives, clips, times and spaces
+// (compare_animation), on the kind of file gltfpack writes: nodes reordered and re-parented, positions
+// quantized to integers with the dequantization on the node (KHR_mesh_quantization), vertices reordered
+// and merged, tracks that move nothing dropped.
+#include "comparison.h"
+
+#include "correspondence.h"
+#include "sampling_fixtures.h"
+
+namespace segmorph {
+namespace {
+
+// A clip of `vertex_count` vertices from frame-major positions.
+FrameSequence clip_of(size_t vertex_count, const std::vector<float>& positions) {
+  FrameSequence clip;
+  clip.vertex_count = vertex_count;
+  clip.frame_count = positions.size() / (vertex_count * 3);
+  clip.positions = positions;
+  for (size_t f = 0; f < clip.frame_count; ++f) clip.times.push_back(float(f));
+  return clip;
+}
+
+TEST(MatchVertices, TrajectoryWinsOverANearerFirstFrame) {
+  // v0 stays at the origin; v1 starts 0.1 away and moves off along x. In the other file quantization has
+  // moved the first frames past each other: v1's copy starts nearer v0 than v0's own copy does.
+  const FrameSequence reference = clip_of(2, {0, 0, 0, 0.1f, 0, 0,  //
+                                              0, 0, 0, 1, 0, 0,     //
+                                              0, 0, 0, 2, 0, 0});
+  const FrameSequence other = clip_of(2, {0.01f, 0, 0, 0.09f, 0, 0,  // other 0 is v1, other 1 is v0
+                                          1, 0, 0, 0, 0, 0,          //
+                                          2, 0, 0, 0, 0, 0});
+  EXPECT_EQ(match_vertices({reference}, {other}), (std::vector<uint32_t>{1, 0}));
+}
+
+TEST(MatchVertices, ReorderedAndMergedDuplicatesPairWithTheirOwnTrajectories) {
+  // v2 and v3 are duplicates (a seam); the other file keeps one copy, last, and shuffles the rest.
+  const FrameSequence reference = clip_of(4, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 0,  //
+                                              0, 0, 1, 1, 0, 2, 0, 1, 3, 0, 1, 3});
+  const FrameSequence other = clip_of(3, {1, 0, 0, 0, 0, 0, 0, 1, 0,  //
+                                          1, 0, 2, 0, 0, 1, 0, 1, 3});
+  EXPECT_EQ(match_vertices({reference}, {other}), (std::vector<uint32_t>{1, 0, 2, 2}));
+  EXPECT_EQ(match_vertices({reference}, {reference}), (std::vector<uint32_t>{0, 1, 2, 3}));
+}
+
+TEST(MatchVertices, FarFromTheOtherFileStillPairs) {
+  // A 10 × 10 × 10 lattice, and the same lattice 1e7 away on every axis (a file read in the wrong space):
+  // millions of empty cell shells lie between them. The search starts at the first shell that meets the
+  // other's box instead of walking out through all of them, and every vertex pairs with the nearest corner,
+  // the last.
+  std::vector<float> near, far;
+  for (int i = 0; i < 1000; ++i)
+    for (float c : {float(i % 10), float(i / 10 % 10), float(i / 100)}) near.push_back(c), far.push_back(c + 1e7f);
+  EXPECT_EQ(match_vertices({clip_of(1000, far)}, {clip_of(1000, near)}), std::vector<uint32_t>(1000, 999));
+}
+
+// The reference: two morph nodes under the scene root and one animation, "Wave".
+//   node 0  translation (2, 0, 0); mesh A, 4 vertices (0, 0, 0) (1, 0, 0) (0, 1, 0) (1, 1, 0.5) and one target
+//           moving v0 by (0, 0, 1) and v3 by (0, 0, -1); "Wave" plays its weight 0, 1, 0 at t = 0, 1, 2.
+//   node 1  mesh B, 3 vertices (0, 5, 0) (1, 5, 0) (0, 6, 0), one target; "Wave" holds its weight at 0.
+tinygltf::Model reference_model() {
+  GltfBuilder gltf;
+  const int mesh_a =
+      gltf.add_mesh(gltf.add_vec3({0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0.5f}),
+                    gltf.add_uints({0, 1, 2, 1, 3, 2}, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT));
+  gltf.add_target(mesh_a, {{"POSITION", gltf.add_vec3({0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, -1})}});
+  const int mesh_b = gltf.add_mesh(gltf.add_vec3({0, 5, 0, 1, 5, 0, 0, 6, 0}));
+  gltf.add_target(mesh_b, {{"POSITION", gltf.add_vec3({0, 0, 0.5f, 0, 0, 0, 0, 0, 0})}});
+  const int node_a = gltf.add_mesh_node(mesh_a);
+  gltf.model.nodes[size_t(node_a)].translation = {2, 0, 0};
+  const int node_b = gltf.add_mesh_node(mesh_b);
+  gltf.add_root(node_a);
+  gltf.add_root(node_b);
+  const int wave = gltf.add_animation("Wave");
+  gltf.add_channel(wave, node_a, "weights", {0, 1, 2}, {0, 1, 0});
+  gltf.add_channel(wave, node_b, "weights", {0, 2}, {0, 0});
+  return gltf.model;
+}
+
+// The reference as gltfpack would write it (-vp with exact steps): a new root holding the meshes; mesh A
+// (node 2) stored as unsigned shorts of step 0.5 and reordered v3 v0 v2 v1, its target as shorts, its node's
+// scale 0.5 and translation (2, 0, 0); mesh B (node 1) stored in steps of 0.25 from (0, 5, 0), reordered
+// v1 v2 v0, its "Wave" track dropped (constant). "Wave" comes second, after an "Idle" that holds A still, and
+// has one more key, on the line between two of the reference's. `v0_delta` is A's target on v0 in steps
+// (2 is the reference's motion).
+tinygltf::Model quantized_model(int v0_delta = 2) {
+  GltfBuilder gltf;
+  const int position_a =
+      gltf.add_uints({2, 2, 1, 0, 0, 0, 0, 2, 0, 2, 0, 0}, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+  const int mesh_a = gltf.add_mesh(position_a);
+  gltf.add_target(mesh_a,
+                  {{"POSITION", gltf.add_shorts({0, 0, -2, 0, 0, v0_delta, 0, 0, 0, 0, 0, 0}, TINYGLTF_TYPE_VEC3)}});
+  const int mesh_b = gltf.add_mesh(
+      gltf.add_uints({4, 0, 0, 0, 4, 0, 0, 0, 0}, TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT));
+  gltf.add_target(mesh_b, {{"POSITION", gltf.add_shorts({0, 0, 0, 0, 0, 0, 0, 0, 2}, TINYGLTF_TYPE_VEC3)}});
+  const int root = gltf.add_node();
+  const int node_b = gltf.add_mesh_node(mesh_b);
+  gltf.model.nodes[size_t(node_b)].translation = {0, 5, 0};
+  gltf.model.nodes[size_t(node_b)].scale = {0.25, 0.25, 0.25};
+  const int node_a = gltf.add_mesh_node(mesh_a);
+  gltf.model.nodes[size_t(node_a)].translation = {2, 0, 0};
+  gltf.model.nodes[size_t(node_a)].scale = {0.5, 0.5, 0.5};
+  gltf.add_child(root, node_b);
+  gltf.add_child(root, node_a);
+  gltf.add_root(root);
+  gltf.add_channel(gltf.add_animation("Idle"), node_a, "weights", {0, 1}, {0, 0});
+  gltf.add_channel(gltf.add_animation("Wave"), node_a, "weights", {0, 0.5f, 1, 2}, {0, 0.5f, 1, 0});
+  return gltf.model;
+}
+
+struct Compared {
+  Status status;
+  AnimationComparison result;
+};
+
+Compared compare(const tinygltf::Model& reference, const tinygltf::Model& other) {
+  Compared out;
+  Scene reference_scene, other_scene;
+  std::vector<SampledNode> sampled;
+  out.status = analyze_scene(reference, reference_scene);
+  if (!out.status.ok()) return out;
+  sampled.resize(reference_scene.animated.size());
+  for (size_t i = 0; i < sampled.size() && out.status.ok(); ++i)
+    out.status = sample_node(reference, reference_scene, reference_scene.animated[i], SampleSettings(), sampled[i]);
+  if (out.status.ok()) out.status = analyze_scene(other, other_scene);
+  if (out.status.ok())
+    out.status = compare_animation(reference, reference_scene, sampled, other, other_scene, out.result);
+  return out;
+}
+
+TEST(CompareAnimation, QuantizedReorderedCopyWithDequantizationOnTheNodeMeasuresZero) {
+  const Compared compared = compare(reference_model(), quantized_model());
+  ASSERT_TRUE(IsOk(compared.status));
+  // Every value is exact in float (steps of 0.25 and 0.5), so the copy plays the reference bit for bit.
+  EXPECT_EQ(compared.result.worst.kg_percent, 0);
+  EXPECT_EQ(compared.result.worst.max_error_over_diagonal, 0);
+  EXPECT_EQ(compared.result.vertices, 7u);
+  EXPECT_EQ(compared.result.frames, 3u);           // node 0's frames: t = 0, 1, 2
+  EXPECT_EQ(compared.result.vertex_frames, 18.0);  // 4 × 3 + 3 × 2 (node 1's track has keys at 0 and 2)
+}
+
+TEST(CompareAnimation, AWrongMotionShowsInTheError) {
+  // v0's target is 3 steps of 0.5 instead of 2: at t = 1 v0 is 0.5 off, in mesh A's space as in the
+  // reference's (node 0's mesh space, the same scale); A's first-frame diagonal is √(1 + 1 + 0.25) = 1.5.
+  const Compared compared = compare(reference_model(), quantized_model(3));
+  ASSERT_TRUE(IsOk(compared.status));
+  EXPECT_NEAR(compared.result.worst.max_error_over_diagonal, 0.5 / 1.5, 1e-6);
+  EXPECT_GT(compared.result.worst.kg_percent, 1);
+}
+
+TEST(CompareAnimation, AFileWithoutTheAnimationIsBadData) {
+  // The other file has one animation, "Run"; the reference two, "Wave" and "Wave again". "Wave" has no
+  // namesake and falls back to index 0; "Wave again" has neither a namesake nor an index 1.
+  tinygltf::Model other = quantized_model();
+  other.animations.resize(1);
+  other.animations[0].name = "Run";
+  tinygltf::Model reference = reference_model();
+  reference.animations.push_back(reference.animations[0]);
+  reference.animations[1].name = "Wave again";
+  const Compared compared = compare(reference, other);
+  EXPECT_EQ(compared.status.code(), StatusCode::bad_data);
+  EXPECT_NE(compared.status.message().find("Wave again"), std::string::npos) << compared.status.message();
+}
+
+}  // namespace
+}  // namespace segmorph
