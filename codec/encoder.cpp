@@ -224,11 +224,10 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   }
   const double sample_share = double(sample.frame_count) / double(frames_total);
   const double max_distortion = std::pow(settings.target / 100.0, 2) * spread;
-  auto candidate_cost = [&](const Clusters& merged, bool temporal) {
+  auto candidate_cost = [&](const Clusters& merged, uint8_t flags) {
     const Clusters candidate = refine_by_motion(merged, base_welded.data(), sample, adjacency, kSampleRefinements);
     StreamContent trial = content;
-    trial.flags = uint8_t(temporal ? trial.flags | format::kFlagTemporalResiduals
-                                   : trial.flags & ~format::kFlagTemporalResiduals);
+    trial.flags = flags;
     trial.clip_frames = sample_clip_frames;
     trial.cluster_count = uint32_t(candidate.count);
     trial.labels = candidate.label;
@@ -264,10 +263,10 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     const double t = (budget - bits[0]) / (bits[1] - bits[0]);
     return std::log(distortion[0]) + t * (std::log(distortion[1]) - std::log(distortion[0]));
   };
-  // Temporal residual prediction (when allowed) is kept when the estimate says it pays: it does for slow
-  // sequences, not always for fast ones (docs/codec.md). The estimate is biased a little against it (each
-  // sample window starts without a previous frame).
-  const bool temporal = settings.temporal_residuals;
+  // Temporal and spatial residual prediction (when allowed) are kept when the estimate says they pay: temporal
+  // does for slow sequences, not always for fast ones; spatial does at higher rates, not always at low ones,
+  // where most residuals quantize to zero (docs/codec.md). The estimate is biased a little against temporal
+  // prediction (each sample window starts without a previous frame).
   if (settings.mode == RateMode::lossless) {
     clusters = merge_clusters(clusters, settings.clusters ? settings.clusters : kLosslessClusters, base_welded.data(),
                               trajectories, adjacency);
@@ -275,7 +274,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     double best_cost;
     if (settings.clusters) {
       clusters = merge_clusters(clusters, settings.clusters, base_welded.data(), trajectories, adjacency);
-      best_cost = temporal ? candidate_cost(clusters, true) : 0;
+      best_cost = candidate_cost(clusters, content.flags);
     } else {
       // Automatic K: more clusters cost motion side information and save residual bits. Candidates from the
       // segmentation's own count down by factors of 2/3, each merged from the segmentation; the search stops
@@ -283,17 +282,21 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
       const size_t largest =
           std::max<size_t>(1, std::min({clusters.count, welded / kVerticesPerCluster, kMaxClusters}));
       Clusters best = merge_clusters(clusters, largest, base_welded.data(), trajectories, adjacency);
-      best_cost = candidate_cost(best, temporal);
+      best_cost = candidate_cost(best, content.flags);
       for (size_t k = largest * 2 / 3; k >= kMinAutomaticClusters; k = k * 2 / 3) {
         Clusters candidate = merge_clusters(clusters, k, base_welded.data(), trajectories, adjacency);
-        const double cost = candidate_cost(candidate, temporal);
+        const double cost = candidate_cost(candidate, content.flags);
         if (!(cost < best_cost)) break;
         best = std::move(candidate), best_cost = cost;
       }
       clusters = std::move(best);
     }
-    if (temporal && candidate_cost(clusters, false) < best_cost)
-      content.flags = uint8_t(content.flags & ~format::kFlagTemporalResiduals);
+    for (uint8_t prediction : {format::kFlagTemporalResiduals, format::kFlagSpatialResiduals}) {
+      if (!(content.flags & prediction)) continue;
+      const uint8_t without = uint8_t(content.flags & ~prediction);
+      const double cost = candidate_cost(clusters, without);
+      if (cost < best_cost) content.flags = without, best_cost = cost;
+    }
   }
   if (settings.motion_refinement) {
     int iterations = 0;
