@@ -150,13 +150,17 @@ void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residua
   }
 }
 
-Status decode_residuals(RangeDecoder& decoder, size_t welded_count, bool lossless, std::vector<int64_t>& residuals) {
+Status decode_residuals(RangeDecoder& decoder, size_t welded_count, size_t frame_count, bool lossless,
+                        std::vector<int64_t>& residuals) {
   const size_t row = welded_count * 3;
-  assert(row > 0 && residuals.size() % row == 0);
+  assert(row > 0);
   ResidualModels models;
   std::vector<History> history(row, 0);
-  int64_t* r = residuals.data();
-  for (size_t frame = 0; frame < residuals.size() / row; ++frame) {
+  residuals.clear();
+  for (size_t frame = 0; frame < frame_count; ++frame) {
+    if (decoder.failed()) return decoder.finish();
+    residuals.resize((frame + 1) * row);
+    int64_t* r = &residuals[frame * row];
     History* h = history.data();
     for (size_t w = 0; w < welded_count; ++w, r += 3, h += 3) {
       if (decoder.decode_bit(models.vertex[vertex_context(h)]) == 0) {

@@ -26,9 +26,11 @@ namespace segmorph {
 // vertex, x y z (StreamContent::residuals); welded_count: W ≥ 1. Lossy residuals must lie in (INT32_MIN, INT32_MAX].
 void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residuals, size_t welded_count, bool lossless);
 
-// Decodes residuals.size() symbols (F × W × 3, sized by the caller) written by encode_residuals. Returns bad_data,
-// and stops early, once the stream is known to be bad (an escape in a lossy stream, a magnitude outside int32, a
+// Decodes frame_count × W × 3 symbols written by encode_residuals into `residuals`, which grows a frame at a time
+// as the data proves to be there (a few bytes of stream can claim gigabytes of frames). Returns bad_data, and
+// stops early, once the stream is known to be bad (an escape in a lossy stream, a magnitude outside int32, a
 // non-canonical escape, or running past the end of the stream); the caller still calls decoder.finish() at the end.
-Status decode_residuals(RangeDecoder& decoder, size_t welded_count, bool lossless, std::vector<int64_t>& residuals);
+Status decode_residuals(RangeDecoder& decoder, size_t welded_count, size_t frame_count, bool lossless,
+                        std::vector<int64_t>& residuals);
 
 }  // namespace segmorph

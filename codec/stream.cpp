@@ -263,8 +263,7 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
     if (!lossless && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
       return corrupt("bad residual quantizer step");
   }
-  content.residuals.resize(frames * content.welded_count * 3);
-  SEGMORPH_RETURN_IF_ERROR(decode_residuals(decoder, content.welded_count, lossless, content.residuals));
+  SEGMORPH_RETURN_IF_ERROR(decode_residuals(decoder, content.welded_count, frames, lossless, content.residuals));
   return decoder.finish();
 }
 

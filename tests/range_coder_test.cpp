@@ -1047,8 +1047,7 @@ DecodedResiduals decode_residual_stream(const std::vector<uint8_t>& bytes, size_
   std::copy(bytes.begin(), bytes.end(), copy.get());
   RangeDecoder decoder(copy.get(), bytes.size());
   DecodedResiduals decoded;
-  decoded.values.assign(count, 0);
-  decoded.status = decode_residuals(decoder, welded_count, lossless, decoded.values);
+  decoded.status = decode_residuals(decoder, welded_count, count / (welded_count * 3), lossless, decoded.values);
   if (decoded.status.ok()) decoded.status = decoder.finish();
   return decoded;
 }
