@@ -44,7 +44,9 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
   // makes G (nearly) singular and L wild along the missing direction, so L is regularized towards the
   // cluster's best rotation R (Kabsch): L = (B + ρR)(G + ρI)⁻¹, ρ = 1e-6 of trace G. Where the cluster
   // spans all directions this moves L by about 1e-6 of its non-rigid part; where it is flat, the missing
-  // direction moves rigidly.
+  // direction moves rigidly. The floor of ρ, 1e-30 squared model units, is for a cluster of one vertex (G = 0):
+  // the 3 × 3 inverse divides by det(G + ρI) = ρ³, which must not underflow to 0 (with 1e-300 it did, and the
+  // cluster's motion came out NaN).
   std::vector<Eigen::Matrix3d> gram(cluster_count, Eigen::Matrix3d::Zero());
   std::vector<size_t> size(cluster_count, 0);
   std::vector<Eigen::Vector3d> centred(vertex_count);
@@ -58,7 +60,7 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
   std::vector<double> rho(cluster_count);
   std::vector<Eigen::Matrix3d> inverse(cluster_count);
   for (size_t k = 0; k < cluster_count; ++k) {
-    rho[k] = 1e-6 * gram[k].trace() + 1e-300;
+    rho[k] = 1e-6 * gram[k].trace() + 1e-30;
     inverse[k] = (gram[k] + rho[k] * Eigen::Matrix3d::Identity()).inverse();
   }
 

@@ -227,8 +227,11 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
     return corrupt("bad motion quantizer steps");
   const size_t clusters = content.cluster_count, frames = content.frame_count();
   if (uint64_t(frames) * clusters > format::kMaxVertexFrames) return corrupt("too many clusters for its frames");
-  content.motion.resize(frames * clusters * 12);
+  // The motion and the residuals grow as they are decoded, never sized up front by the counts: a stream of a
+  // few bytes can claim kMaxVertexFrames positions (gigabytes), and its data runs out (decoder.failed()) long
+  // before memory would.
   for (size_t f = 0; f < frames; ++f) {
+    content.motion.resize((f + 1) * clusters * 12);
     for (size_t k = 0; k < clusters; ++k)
       for (size_t c = 0; c < 12; ++c) {
         const size_t index = (f * clusters + k) * 12 + c;
@@ -264,6 +267,12 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
       return corrupt("bad residual quantizer step");
   }
   SEGMORPH_RETURN_IF_ERROR(decode_residuals(decoder, content.welded_count, frames, lossless, content.residuals));
+  // Lossless residuals are differences of ordered_bits values (all in [−2^31, 2^31)), so within ±(2^32 − 1); the
+  // coder's escapes carry any 64-bit value, which the reconstruction would overflow adding it to a pattern.
+  if (lossless)
+    for (int64_t value : content.residuals)
+      if (value < -format::kMaxLosslessResidual || value > format::kMaxLosslessResidual)
+        return corrupt("lossless residual out of range");
   return decoder.finish();
 }
 

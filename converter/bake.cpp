@@ -115,6 +115,18 @@ int source_node(const tinygltf::Node& node) {
 }
 
 Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled) {
+  // The references this function follows, checked first: decode_compressed_model gets here without
+  // analyze_scene, and analyze_scene checks skins only on nodes with a mesh.
+  NodeGraph graph;
+  SEGMORPH_RETURN_IF_ERROR(build_node_graph(model, graph));
+  for (size_t n = 0; n < model.nodes.size(); ++n)
+    if (model.nodes[n].skin >= 0 && size_t(model.nodes[n].skin) >= model.skins.size())
+      return Status(StatusCode::bad_data, "node " + std::to_string(n) + " names a skin that does not exist");
+  for (size_t s = 0; s < model.skins.size(); ++s)
+    for (int joint : model.skins[s].joints)
+      if (joint < 0 || size_t(joint) >= model.nodes.size())
+        return Status(StatusCode::bad_data, "skin " + std::to_string(s) + " names a joint that does not exist");
+
   AccessorWriter writer(model);
   const std::vector<std::vector<bool>> members = scene_members(model);
   std::vector<int> host(model.nodes.size(), -1);  // original animated node -> node carrying its baked mesh

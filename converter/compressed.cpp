@@ -309,12 +309,20 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
       if (position == primitive.attributes.end()) return Status(StatusCode::bad_data, what + " has no POSITION");
       SEGMORPH_RETURN_IF_ERROR(read_floats(model, position->second, what + " POSITION", out.rest_positions, &components));
       if (components != 3) return Status(StatusCode::bad_data, what + ": POSITION must be VEC3");
+      // Checked as sample_node checks them: baking reads one normal and one tangent per vertex.
       auto normal = primitive.attributes.find("NORMAL");
-      if (normal != primitive.attributes.end())
-        SEGMORPH_RETURN_IF_ERROR(read_floats(model, normal->second, what + " NORMAL", out.rest_normals));
+      if (normal != primitive.attributes.end()) {
+        SEGMORPH_RETURN_IF_ERROR(read_floats(model, normal->second, what + " NORMAL", out.rest_normals, &components));
+        if (components != 3 || out.rest_normals.size() != out.rest_positions.size())
+          return Status(StatusCode::bad_data, what + ": NORMAL must be VEC3 with one element per vertex");
+      }
       auto tangent = primitive.attributes.find("TANGENT");
-      if (tangent != primitive.attributes.end())
-        SEGMORPH_RETURN_IF_ERROR(read_floats(model, tangent->second, what + " TANGENT", out.rest_tangents));
+      if (tangent != primitive.attributes.end()) {
+        SEGMORPH_RETURN_IF_ERROR(
+            read_floats(model, tangent->second, what + " TANGENT", out.rest_tangents, &components));
+        if (components != 4 || out.rest_tangents.size() != out.rest_positions.size() / 3 * 4)
+          return Status(StatusCode::bad_data, what + ": TANGENT must be VEC4 with one element per vertex");
+      }
       std::vector<uint32_t> triangles;
       if (primitive.indices < 0) return Status(StatusCode::bad_data, what + ": a compressed primitive needs indices");
       SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", triangles));

@@ -12,6 +12,7 @@
 #include <map>
 #include <set>
 
+#include "accessor.h"
 #include "json_prepass.h"
 #include "segmorph_extension.h"
 
@@ -253,6 +254,13 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
     if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), name) != model.extensionsUsed.end())
       return Status(StatusCode::unsupported,
                     std::string("uses ") + name + ", which segmorph does not decode; decompress the file first");
+  }
+  // tinygltf leaves bufferViews unchecked against their buffers. Reads check the views they use, but repack
+  // copies every view an accessor names, read or not: all are checked here, once.
+  for (size_t view = 0; view < model.bufferViews.size(); ++view) {
+    const unsigned char* data = nullptr;
+    size_t size = 0;
+    SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, int(view), "glTF", &data, &size));
   }
   return Status::Ok();
 }

@@ -55,16 +55,18 @@ std::string output_directory(const std::string& name) {
   return directory;
 }
 
-// Runs bake with a bad input and checks the promise: exit 1, one line naming the file, no output, no leftovers.
-void expect_clean_failure(const std::string& input, const std::string& expected_message) {
+// Runs bake (or `command`) with a bad input and checks the promise: exit 1, one line naming the file, no output,
+// no leftovers.
+void expect_clean_failure(const std::string& input, const std::string& expected_message,
+                          const std::string& command = "bake") {
   SCOPED_TRACE(input);
   const std::string directory = output_directory("failure");
-  const Result result = run("bake -q '" + input + "' -o " + directory + "/out.glb");
+  const Result result = run(command + " -q '" + input + "' -o " + directory + "/out.glb");
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
   EXPECT_NE(result.err.find(input), std::string::npos) << result.err;
   EXPECT_NE(result.err.find(expected_message), std::string::npos) << result.err;
-  EXPECT_TRUE(fs::is_empty(directory)) << "bake left files behind";
+  EXPECT_TRUE(fs::is_empty(directory)) << command << " left files behind";
 }
 
 TEST(Cli, HelpAndVersion) {
@@ -124,6 +126,66 @@ TEST(Cli, BadInputsFailCleanly) {
   morph.replace(count, morph.find_first_of(",}", count) - count, "\"count\" : 3000000");
   write_text(directory + "/out_of_range.gltf", morph);
   expect_clean_failure(directory + "/out_of_range.gltf", "accessor");
+}
+
+// SimpleMorph with a TEXCOORD_0 accessor whose bufferView names a missing buffer, or lies outside its buffer: bake
+// keeps the attribute without reading it, and repack copied the view unchecked (found by tests/fuzz).
+TEST(Cli, UnreadBufferViewOutsideItsBufferFailsCleanly) {
+  const std::string directory = output_directory("views");
+  fs::copy_file(sample("SimpleMorph/simpleMorphGeometry.bin"), directory + "/simpleMorphGeometry.bin");
+  fs::copy_file(sample("SimpleMorph/simpleMorphAnimation.bin"), directory + "/simpleMorphAnimation.bin");
+  for (const std::string view :
+       {R"({"buffer":7,"byteLength":24})", R"({"buffer":1,"byteOffset":48,"byteLength":24})"}) {
+    std::string morph = read_text(sample("SimpleMorph/SimpleMorph.gltf"));
+    const std::string position = "\"POSITION\":1";
+    morph.insert(morph.find(position) + position.size(), ",\"TEXCOORD_0\":6");
+    // New last entries of "accessors" (followed by "asset") and "bufferViews" (followed by "accessors").
+    morph.insert(morph.rfind(']', morph.find("\"asset\"")),
+                 R"(,{"bufferView":4,"componentType":5126,"count":3,"type":"VEC2"})");
+    morph.insert(morph.rfind(']', morph.find("\"accessors\"")), "," + view);
+    write_text(directory + "/texcoord.gltf", morph);
+    expect_clean_failure(directory + "/texcoord.gltf", "bufferView 4");
+  }
+}
+
+// References bake_model follows without checking them itself (found by tests/fuzz): a skin index on a node without
+// a mesh (analyze_scene checks skins only where there is a mesh), and a child index in an encoded file (decoding
+// bakes without analyze_scene).
+TEST(Cli, BadNodeReferencesFailCleanly) {
+  const std::string directory = output_directory("references");
+  fs::copy_file(sample("SimpleMorph/simpleMorphGeometry.bin"), directory + "/simpleMorphGeometry.bin");
+  fs::copy_file(sample("SimpleMorph/simpleMorphAnimation.bin"), directory + "/simpleMorphAnimation.bin");
+  std::string morph = read_text(sample("SimpleMorph/SimpleMorph.gltf"));
+  morph.insert(morph.find('}', morph.find("\"mesh\":0")) + 1, R"(,{"skin":99})");  // a second node
+  write_text(directory + "/skin.gltf", morph);
+  expect_clean_failure(directory + "/skin.gltf", "skin that does not exist");
+
+  ASSERT_EQ(run("encode -q " + sample("AnimatedMorphCube/AnimatedMorphCube.glb") + " -o " + directory + "/cube.gltf")
+                .exit_code,
+            0);
+  std::string cube = read_text(directory + "/cube.gltf");
+  cube.insert(cube.find("\"mesh\": 0"), R"("children": [99], )");
+  write_text(directory + "/cube.gltf", cube);
+  expect_clean_failure(directory + "/cube.gltf", "child that does not exist", "decode");
+}
+
+// An encoded file whose Draco attribute map gives TANGENT the normals (three components) or NORMAL the tangents
+// (four): decoding baked them unchecked and read past the end (found by tests/fuzz).
+TEST(Cli, DecodedNormalsOrTangentsOfTheWrongShapeFailCleanly) {
+  const std::string directory = output_directory("shapes");
+  ASSERT_EQ(run("encode -q " + sample("AnimatedMorphCube/AnimatedMorphCube.glb") + " -o " + directory + "/cube.gltf")
+                .exit_code,
+            0);
+  const std::string cube = read_text(directory + "/cube.gltf");
+  ASSERT_NE(cube.find("\"NORMAL\": 1,"), std::string::npos);
+  ASSERT_NE(cube.find("\"TANGENT\": 2"), std::string::npos);
+  std::string tangent = cube, normal = cube;
+  tangent.replace(tangent.find("\"TANGENT\": 2"), 12, "\"TANGENT\": 1");
+  normal.replace(normal.find("\"NORMAL\": 1,"), 12, "\"NORMAL\": 2,");
+  write_text(directory + "/tangent.gltf", tangent);
+  write_text(directory + "/normal.gltf", normal);
+  expect_clean_failure(directory + "/tangent.gltf", "TANGENT must be VEC4", "decode");
+  expect_clean_failure(directory + "/normal.gltf", "NORMAL must be VEC3", "decode");
 }
 
 TEST(Cli, CorruptedInputsFailCleanlyOrBake) {

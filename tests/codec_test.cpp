@@ -7,9 +7,11 @@
 #include <cstring>
 #include <random>
 
+#include "fuzz/fuzz_base_mesh.h"
 #include "gltf_io.h"
 #include "metrics.h"
 #include "sample.h"
+#include "stream.h"
 #include "test_files.h"
 #include "test_meshes.h"
 
@@ -244,6 +246,47 @@ TEST(CodecHostile, RandomByteFlipsNeverCrash) {
     }
   }
   EXPECT_GT(refused, 200u);  // the range coder's end check catches nearly every change
+}
+
+// 25 bytes for the fuzz targets' base mesh that claim one clip of 5 million frames and one cluster, and end
+// after the motion quantizer steps. The decoder sized the motion by the claim (240 MB here; 11 GB with 46
+// clusters, which fuzz_animation_stream reports as out-of-memory) before decoding any of it.
+TEST(CodecHostile, ShortStreamClaimingMillionsOfFramesAllocatesNothingForThem) {
+  const uint8_t stream[] = {0x53, 0x47, 0x4d, 0x41, 0x01, 0x06, 0x0f, 0x00, 0x00, 0x00, 0x1a, 0x80, 0xb9,
+                            0x84, 0x08, 0x8c, 0x7f, 0x1a, 0xbc, 0x50, 0x20, 0x71, 0xf5, 0x3a, 0x20};
+  const fuzz::BaseMesh mesh = fuzz::base_mesh();
+  std::vector<FrameSequence> decoded;
+  EXPECT_EQ(decode_animation(stream, sizeof(stream), mesh.positions, mesh.triangles, decoded).code(),
+            StatusCode::bad_data);
+  StreamContent content;
+  EXPECT_FALSE(read_stream(stream, sizeof(stream), mesh.positions, content).ok());
+  EXPECT_EQ(content.frame_count(), 5000000u);
+  // What was decoded before the data ran out, not 60 million coefficients.
+  EXPECT_LT(content.motion.capacity(), 1000u);
+  EXPECT_EQ(content.residuals.capacity(), 0u);
+}
+
+// A lossless escape carries any 64-bit value. Added to the float pattern of a prediction, one beyond the largest
+// difference of two patterns (±(2^32 − 1)) overflowed int64: undefined behaviour, which UBSan reported in
+// fuzz_animation_stream on a seed rewritten this way.
+TEST(CodecHostile, LosslessEscapeBeyondAnyFloatDifferenceIsRefused) {
+  const std::vector<FrameSequence> clips = {bending_clip(3, 1.0, 0)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  CodecSettings settings;
+  settings.mode = RateMode::lossless;
+  const Encoded encoded = encode(clips, base, settings);
+  StreamContent content;
+  ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+  for (int64_t extreme : {INT64_MAX, -INT64_MAX, int64_t(1) << 32}) {
+    StreamContent changed = content;
+    std::fill_n(changed.residuals.begin(), size_t(content.welded_count) * 3, extreme);  // the first frame
+    std::vector<uint8_t> stream;
+    write_stream(changed, base, stream);
+    std::vector<FrameSequence> decoded;
+    EXPECT_EQ(decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded).code(),
+              StatusCode::bad_data)
+        << extreme;
+  }
 }
 
 }  // namespace

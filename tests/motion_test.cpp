@@ -87,6 +87,28 @@ TEST(Motion, MotionErrorGrowsWhenAClusterMixesTwoMotions) {
   EXPECT_GT(wrong, 1e-4);
 }
 
+// Found by the fuzz seed generator (tests/fuzz): a vertex no triangle uses became a cluster of its own, whose
+// G + ρI was too small to invert (ρ³ underflowed); its motion came out NaN, and a bpvf encode converted NaN to int.
+TEST(Motion, AClusterOfOneVertexGetsFiniteMotion) {
+  std::mt19937 random(6);
+  const std::vector<float> base = random_base(40, random);
+  Clusters clusters;
+  clusters.count = 2;
+  for (size_t v = 0; v < 40; ++v) clusters.label.push_back(uint32_t(v == 39 ? 1 : 0));
+  std::vector<std::vector<std::array<double, 12>>> maps(3);
+  for (auto& frame : maps) frame = {random_map(random), random_map(random)};
+  const Trajectories frames = move_by(base, clusters, maps);
+  const AffineMotion motion = fit_affine_motion(base.data(), frames, clusters);
+  for (double x : motion.transforms) ASSERT_TRUE(std::isfinite(x));
+  EXPECT_TRUE(std::isfinite(motion_compensation_error(base.data(), frames, clusters, motion)));
+  // The lone vertex is its cluster's centroid: its prediction is its own position.
+  std::vector<double> predicted(120);
+  for (size_t f = 0; f < 3; ++f) {
+    predict_frame(base.data(), motion, own_cluster_weights(clusters), f, predicted.data());
+    for (size_t c = 0; c < 3; ++c) EXPECT_NEAR(predicted[39 * 3 + c], frames.frame(f)[39 * 3 + c], 1e-6);
+  }
+}
+
 TEST(Motion, WeightsRecoverASyntheticBlend) {
   // Vertices 0..99 follow cluster 0, 100..199 cluster 1, and the "seam" vertices 200..219 (labelled 0) move by
   // 0.3 of cluster 0's map plus 0.7 of cluster 1's: Eq. 3 must find those weights.

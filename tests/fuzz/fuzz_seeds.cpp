@@ -1,0 +1,171 @@
+// Writes the seed corpus of fuzz_animation_stream: valid streams of small synthetic animations of the fuzzer's
+// base mesh, one per codec configuration (lossy at several targets, lossless, fixed cluster counts, each residual
+// predictor on and off, several clips), so that mutations start from every path of the decoder. Each stream is
+// checked to decode to the encoder's reconstruction before it is written.
+//
+//   fuzz_seeds OUTPUT_DIRECTORY
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "codec.h"
+#include "fuzz_base_mesh.h"
+
+namespace segmorph::fuzz {
+namespace {
+
+constexpr uint32_t kJumping = 20;
+
+// Frame f of a clip of `frames` frames: the sphere's right half bends about z with a travelling ripple, the seam
+// copies 44, 45 and the third copy of vertex 4 tear away from their originals (so that the decoder meets groups
+// of identical base positions that are welded and groups that are not), the loose triangle turns, the isolated
+// vertex drifts, and sphere vertex kJumping jumps between x = ±6, far from its cluster's motion (in lossless
+// streams, differences of float bit patterns beyond int32, which the stream codes with an escape). Frame 0 of
+// clip 0 is the base mesh.
+std::vector<float> frame_positions(const BaseMesh& mesh, size_t clip, size_t f, size_t frames) {
+  const double t = double(f) / double(frames), bend = clip % 2 ? -0.8 : 1.2, phase = double(clip);
+  std::vector<float> positions = mesh.positions;
+  if (clip == 0 && f == 0) return positions;
+  for (uint32_t v = 0; v < kLoose; ++v) {
+    const double x = mesh.positions[v * 3], y = mesh.positions[v * 3 + 1];
+    const double angle = x > 0 ? bend * t * x / 2 : 0.0;
+    const double ripple = 0.05 * std::sin(3 * x + 6.28 * t + phase);
+    positions[v * 3] = float(x * std::cos(angle) - y * std::sin(angle));
+    positions[v * 3 + 1] = float(x * std::sin(angle) + y * std::cos(angle) + ripple);
+  }
+  for (uint32_t v : {kSeam + 2, kSeam + 3, kSplit + 1})
+    positions[v * 3 + 2] += float(0.1 * t);
+  const double turn = 0.5 * t + 0.2 * phase;
+  for (uint32_t v = kLoose; v < kLoose + 3; ++v) {
+    const double x = mesh.positions[v * 3] - 3.0, y = mesh.positions[v * 3 + 1];
+    positions[v * 3] = float(3.0 + x * std::cos(turn) - y * std::sin(turn));
+    positions[v * 3 + 1] = float(x * std::sin(turn) + y * std::cos(turn));
+  }
+  positions[kIsolated * 3 + 1] += float(t);
+  positions[kJumping * 3] = f % 2 ? 6.0f : -6.0f;
+  return positions;
+}
+
+std::vector<FrameSequence> animation(const BaseMesh& mesh, const std::vector<size_t>& clip_frames) {
+  std::vector<FrameSequence> clips;
+  for (size_t c = 0; c < clip_frames.size(); ++c) {
+    FrameSequence clip;
+    clip.vertex_count = mesh.vertex_count();
+    clip.frame_count = clip_frames[c];
+    clip.triangles = mesh.triangles;
+    for (size_t f = 0; f < clip.frame_count; ++f) {
+      const std::vector<float> frame = frame_positions(mesh, c, f, clip.frame_count);
+      clip.positions.insert(clip.positions.end(), frame.begin(), frame.end());
+      clip.times.push_back(float(f) / 30);
+    }
+    clips.push_back(std::move(clip));
+  }
+  return clips;
+}
+
+struct Seed {
+  const char* name;
+  CodecSettings settings;
+  std::vector<size_t> clip_frames;
+};
+
+CodecSettings lossy(double error) {
+  CodecSettings settings;
+  settings.target = error;
+  return settings;
+}
+
+CodecSettings lossless() {
+  CodecSettings settings;
+  settings.mode = RateMode::lossless;
+  return settings;
+}
+
+CodecSettings bpvf(double bits) {
+  CodecSettings settings;
+  settings.mode = RateMode::bpvf;
+  settings.target = bits;
+  return settings;
+}
+
+CodecSettings with_clusters(CodecSettings settings, size_t clusters) {
+  settings.clusters = clusters;
+  return settings;
+}
+
+CodecSettings with_residuals(CodecSettings settings, bool temporal, bool spatial) {
+  settings.temporal_residuals = temporal;
+  settings.spatial_residuals = spatial;
+  return settings;
+}
+
+// The paper's plain scheme: no refinements, no blending.
+CodecSettings plain(CodecSettings settings) {
+  settings.curvature_refinement = false;
+  settings.motion_refinement = false;
+  settings.blend_weights = false;
+  return settings;
+}
+
+std::vector<Seed> seeds() {
+  return {
+      {"lossy_error_0.5", lossy(0.5), {8}},
+      {"lossy_error_0.05", lossy(0.05), {8}},
+      {"lossy_bpvf_4", bpvf(4), {10}},
+      {"lossy_three_clips", lossy(0.15), {6, 3, 1}},
+      {"lossy_clusters_1", with_clusters(lossy(0.15), 1), {6}},
+      {"lossy_clusters_2", with_clusters(lossy(0.15), 2), {6, 4}},
+      {"lossy_plain_no_prediction", with_residuals(plain(lossy(0.15)), false, false), {6}},
+      {"lossy_temporal_only", with_residuals(lossy(0.15), true, false), {6}},
+      {"lossy_spatial_only", with_residuals(lossy(0.15), false, true), {6}},
+      {"lossless", lossless(), {6, 4}},
+      {"lossless_clusters_3_no_prediction", with_residuals(with_clusters(lossless(), 3), false, false), {5}},
+      {"lossless_temporal_only", with_residuals(lossless(), true, false), {5}},
+      {"lossless_spatial_only", with_residuals(plain(lossless()), false, true), {5}},
+  };
+}
+
+}  // namespace
+}  // namespace segmorph::fuzz
+
+int main(int argc, char** argv) {
+  using namespace segmorph;
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: fuzz_seeds OUTPUT_DIRECTORY\n");
+    return 2;
+  }
+  const std::filesystem::path directory = argv[1];
+  std::error_code error;
+  std::filesystem::create_directories(directory, error);
+  if (error) {
+    std::fprintf(stderr, "fuzz_seeds: %s: cannot create: %s\n", argv[1], error.message().c_str());
+    return 1;
+  }
+  const fuzz::BaseMesh mesh = fuzz::base_mesh();
+  for (const fuzz::Seed& seed : fuzz::seeds()) {
+    const std::vector<FrameSequence> clips = fuzz::animation(mesh, seed.clip_frames);
+    std::vector<uint8_t> stream;
+    std::vector<FrameSequence> reconstruction, decoded;
+    Status status = encode_animation(clips, mesh.positions, seed.settings, stream, nullptr, &reconstruction);
+    if (status.ok()) status = decode_animation(stream.data(), stream.size(), mesh.positions, mesh.triangles, decoded);
+    if (status.ok())
+      for (size_t c = 0; c < clips.size(); ++c)
+        if (decoded[c].positions != reconstruction[c].positions)
+          status = Status(StatusCode::bad_data, "decodes to other frames than the encoder's reconstruction");
+    if (!status.ok()) {
+      std::fprintf(stderr, "fuzz_seeds: %s: %s\n", seed.name, status.message().c_str());
+      return 1;
+    }
+    const std::filesystem::path path = directory / (std::string(seed.name) + ".sgma");
+    std::ofstream file(path, std::ios::binary);
+    file.write(reinterpret_cast<const char*>(stream.data()), std::streamsize(stream.size()));
+    if (!file.flush()) {
+      std::fprintf(stderr, "fuzz_seeds: %s: cannot write\n", path.c_str());
+      return 1;
+    }
+  }
+  return 0;
+}
