@@ -172,15 +172,15 @@ void put_u32(std::string& out, size_t at, uint32_t value) {
   for (int i = 0; i < 4; ++i) out[at + size_t(i)] = char(value >> (8 * i));
 }
 
-// The file with its JSON passed through drop_draco_indices, in `rewritten`; empty when nothing changed (or
-// the GLB is malformed, which tinygltf then reports).
+// The file with its JSON checked by check_json_nesting and passed through drop_draco_indices, in `rewritten`;
+// empty when nothing changed (or the GLB is malformed, which tinygltf then reports).
 Status rewrite_for_tinygltf(const std::string& path, bool binary, std::string& rewritten) {
   rewritten.clear();
   std::ifstream file(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  if (bytes.find("KHR_draco_mesh_compression") == std::string::npos) return Status::Ok();
   bool changed = false;
   if (!binary) {
+    SEGMORPH_RETURN_IF_ERROR(check_json_nesting(bytes));
     SEGMORPH_RETURN_IF_ERROR(drop_draco_indices(bytes, changed));
     if (changed) rewritten = std::move(bytes);
     return Status::Ok();
@@ -191,6 +191,7 @@ Status rewrite_for_tinygltf(const std::string& path, bool binary, std::string& r
   const uint64_t json_length = read_u32(data + 12);
   if (20 + json_length > bytes.size()) return Status::Ok();
   std::string json = bytes.substr(20, size_t(json_length));
+  SEGMORPH_RETURN_IF_ERROR(check_json_nesting(json));
   SEGMORPH_RETURN_IF_ERROR(drop_draco_indices(json, changed));
   if (!changed) return Status::Ok();
   while (json.size() % 4) json += ' ';
@@ -228,7 +229,8 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
   }
   file.close();
 
-  // Valid files tinygltf 2.7 refuses are rewritten in memory first (json_prepass.h); the rest load as they are.
+  // Valid files tinygltf 2.7 refuses are rewritten in memory first, and JSON that would crash it is refused
+  // (json_prepass.h); the rest load as they are.
   std::string rewritten;
   SEGMORPH_RETURN_IF_ERROR(rewrite_for_tinygltf(path, binary, rewritten));
 

@@ -129,6 +129,29 @@ void write(const Json& value, std::string& out) {
 
 }  // namespace
 
+Status check_json_nesting(const std::string& json, int max_depth) {
+  int depth = 0;
+  bool in_string = false;
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (in_string) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth)
+        return Status(StatusCode::bad_data,
+                      "cannot parse glTF: JSON nested deeper than " + std::to_string(max_depth) + " levels");
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return Status::Ok();
+}
+
 Status drop_draco_indices(std::string& json, bool& changed) {
   changed = false;
   // Most files have no Draco at all: nothing to parse.

@@ -16,4 +16,8 @@ namespace segmorph {
 // cannot parse (nesting deeper than 256 levels included), which tinygltf would refuse too.
 Status drop_draco_indices(std::string& json, bool& changed);
 
+// Fails when arrays and objects nest deeper than `max_depth` (strings skipped): tinygltf 2.7 parses JSON
+// recursively and overflows the stack on a file of some ten thousand '[' (a 60 KB file crashed it).
+Status check_json_nesting(const std::string& json, int max_depth = 512);
+
 }  // namespace segmorph

@@ -102,6 +102,10 @@ TEST(Cli, BadInputsFailCleanly) {
 
   write_text(directory + "/text.gltf", "hello, I am not glTF\n");
   expect_clean_failure(directory + "/text.gltf", "not a glTF file");
+  // 30 000 nested arrays crash tinygltf 2.7's recursive parser (stack overflow); segmorph refuses them first.
+  write_text(directory + "/deep.gltf",
+             "{\"asset\": {\"version\": \"2.0\"}, \"x\": " + std::string(30000, '[') + std::string(30000, ']') + "}");
+  expect_clean_failure(directory + "/deep.gltf", "nested deeper");
 
   write_text(directory + "/broken.gltf", "{ \"asset\": { \"version\": \"2.0\" }, \"nodes\": [ {");
   expect_clean_failure(directory + "/broken.gltf", "cannot parse");

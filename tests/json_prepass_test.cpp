@@ -71,5 +71,13 @@ TEST(JsonPrepass, MalformedOrHostileJsonIsRefusedCleanly) {
   EXPECT_EQ(odd, before);
 }
 
+TEST(JsonPrepass, DeepNestingIsRefusedBeforeTinygltfSeesIt) {
+  EXPECT_TRUE(check_json_nesting("{\"a\": [[[{\"b\": \"[[[[[[[[[[\"}]]]}").ok());  // brackets in strings do not count
+  EXPECT_TRUE(check_json_nesting(std::string(512, '[') + std::string(512, ']')).ok());
+  const Status status = check_json_nesting(std::string(513, '[') + std::string(513, ']'));
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("nested deeper"), std::string::npos) << status.message();
+}
+
 }  // namespace
 }  // namespace segmorph
