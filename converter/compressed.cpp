@@ -284,11 +284,18 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
     for (const CompressedClip& clip : primitives[0].clips) {
       if (size_t(clip.animation) >= model.animations.size())
         return Status(StatusCode::bad_data, what + ": a clip names an animation that does not exist");
+      if (std::find(node.clips.begin(), node.clips.end(), clip.animation) != node.clips.end())
+        return Status(StatusCode::bad_data, what + ": two clips name the same animation");
       node.clips.push_back(clip.animation);
     }
-    for (const CompressedPrimitive& other : primitives)
-      if (other.clips.size() != primitives[0].clips.size())
-        return Status(StatusCode::bad_data, what + ": its primitives disagree on the clips");
+    // Validity rule 2 (spec/README.md): every primitive of the mesh has the same clips (each its own times).
+    for (const CompressedPrimitive& other : primitives) {
+      bool same = other.clips.size() == primitives[0].clips.size();
+      for (size_t c = 0; same && c < other.clips.size(); ++c)
+        same = other.clips[c].animation == primitives[0].clips[c].animation &&
+               other.clips[c].step == primitives[0].clips[c].step;
+      if (!same) return Status(StatusCode::bad_data, what + ": its primitives disagree on the clips");
+    }
     animated.push_back(node);
     streams.push_back(std::move(primitives));
   }

@@ -277,6 +277,18 @@ TEST(Cli, DracoIndicesWithoutBufferViewAreRead) {
   }
 }
 
+// Two clips of a compressed primitive naming one animation would make decode write an invalid file.
+TEST(Cli, ClipsNamingOneAnimationTwiceAreRefused) {
+  const std::string directory = output_directory("clips_twice");
+  ASSERT_EQ(run("encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/fox.gltf --error 1").exit_code, 0);
+  std::string json = read_text(directory + "/fox.gltf");
+  const size_t second = json.find("\"animation\": 1,", json.find("SEGMORPH_animation_compression\": {"));
+  ASSERT_NE(second, std::string::npos);
+  json.replace(second, 15, "\"animation\": 0,");
+  write_text(directory + "/fox.gltf", json);
+  expect_clean_failure(directory + "/fox.gltf", "two clips name the same animation", "decode");
+}
+
 TEST(Cli, EncodeDecodeAndVerify) {
   const std::string directory = output_directory("encode");
   const std::string input = sample("Fox/Fox.glb");
