@@ -188,8 +188,13 @@ Status rewrite_for_tinygltf(const std::string& path, bool binary, std::string& r
   // GLB: a 12-byte header, then the JSON chunk (length, type, data), then the rest, kept as it is.
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
   if (bytes.size() < 20 || read_u32(data + 16) != 0x4E4F534Au) return Status::Ok();
+  // tinygltf 2.7 does not check a chunk's length against the data it has (found by fuzzing: it reads past the
+  // end), so every chunk is checked here, and the header's total length.
+  const Status malformed(StatusCode::bad_data, "cannot parse glTF: GLB chunk lengths disagree with the file size");
+  if (read_u32(data + 8) != bytes.size()) return malformed;
+  for (uint64_t at = 12; at < bytes.size(); at += 8 + uint64_t(read_u32(data + at)))
+    if (at + 8 > bytes.size() || at + 8 + read_u32(data + at) > bytes.size()) return malformed;
   const uint64_t json_length = read_u32(data + 12);
-  if (20 + json_length > bytes.size()) return Status::Ok();
   std::string json = bytes.substr(20, size_t(json_length));
   SEGMORPH_RETURN_IF_ERROR(check_json_nesting(json));
   SEGMORPH_RETURN_IF_ERROR(drop_draco_indices(json, changed));

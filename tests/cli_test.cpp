@@ -102,6 +102,16 @@ TEST(Cli, BadInputsFailCleanly) {
 
   write_text(directory + "/text.gltf", "hello, I am not glTF\n");
   expect_clean_failure(directory + "/text.gltf", "not a glTF file");
+  // GLB chunks longer than the file: tinygltf 2.7 reads past its buffer (found by fuzzing). A file cut short,
+  // and one whose header says so but whose BIN chunk claims 4 bytes more.
+  const std::string glb = read_text(sample("AnimatedMorphCube/AnimatedMorphCube.glb"));
+  write_text(directory + "/short.glb", glb.substr(0, glb.size() - 4));
+  expect_clean_failure(directory + "/short.glb", "chunk lengths");
+  std::string longer = glb;
+  const size_t bin = 20 + size_t(uint8_t(glb[12])) + (size_t(uint8_t(glb[13])) << 8) + (size_t(uint8_t(glb[14])) << 16);
+  longer[bin] = char(uint8_t(longer[bin]) + 4);  // the BIN chunk's length, low byte (0xBC in this file: no carry)
+  write_text(directory + "/long_chunk.glb", longer);
+  expect_clean_failure(directory + "/long_chunk.glb", "chunk lengths");
   // 30 000 nested arrays crash tinygltf 2.7's recursive parser (stack overflow); segmorph refuses them first.
   write_text(directory + "/deep.gltf",
              "{\"asset\": {\"version\": \"2.0\"}, \"x\": " + std::string(30000, '[') + std::string(30000, ']') + "}");
