@@ -19,6 +19,7 @@
 #include "reconstruction.h"
 #include "sample.h"
 #include "segmentation.h"
+#include "stand_in_base.h"
 #include "stream.h"
 #include "topology.h"
 
@@ -43,18 +44,6 @@ struct Fixture {
 };
 Fixture* fixture = nullptr;
 
-std::vector<float> quantized_base(const FrameSequence& clip) {
-  std::vector<float> base(clip.frame(0), clip.frame(0) + clip.vertex_count * 3);
-  float low[3], high[3];
-  for (int c = 0; c < 3; ++c) low[c] = high[c] = base[size_t(c)];
-  for (size_t i = 0; i < base.size(); ++i)
-    low[i % 3] = std::min(low[i % 3], base[i]), high[i % 3] = std::max(high[i % 3], base[i]);
-  const float range = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
-  for (size_t i = 0; i < base.size(); ++i)
-    base[i] = low[i % 3] + std::round((base[i] - low[i % 3]) / range * 16383) * range / 16383;
-  return base;
-}
-
 bool set_up(const char* path, double error) {
   tinygltf::Model model;
   Scene scene;
@@ -68,7 +57,7 @@ bool set_up(const char* path, double error) {
   Fixture& f = *fixture;
   if (status.ok()) {
     f.clips = node.primitives[0].clips;
-    f.base = quantized_base(f.clips[0]);
+    f.base = bench::stand_in_base(f.clips[0]);
     status = encode_animation(f.clips, f.base, settings, f.stream);
   }
   if (status.ok()) status = read_stream(f.stream.data(), f.stream.size(), f.base, f.content);
@@ -152,8 +141,8 @@ void EncodeMeasureSubbands(benchmark::State& state) {
   const Fixture& f = *fixture;
   std::vector<double> steps[3];
   for (int axis = 0; axis < 3; ++axis) {
-    steps[axis] = candidate_steps(f.content.residual_step[axis]);
-    steps[axis].resize(size_t(state.range(0)));
+    for (int64_t j = 0; j < state.range(0); ++j)  // quarter-octaves from the encoder's choice
+      steps[axis].push_back(f.content.residual_step[axis] * std::exp2(double(j) / 4.0));
   }
   for (auto _ : state) {
     SubbandCurve curves[3];

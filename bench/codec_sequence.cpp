@@ -16,6 +16,7 @@
 #include "gltf_io.h"
 #include "metrics.h"
 #include "sample.h"
+#include "stand_in_base.h"
 
 using namespace segmorph;
 
@@ -28,15 +29,24 @@ int main(int argc, char** argv) {
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
-    if (arg == "--error" && has_value) settings.mode = RateMode::error, settings.target = std::atof(argv[++i]);
-    else if (arg == "--bpvf" && has_value) settings.mode = RateMode::bpvf, settings.target = std::atof(argv[++i]);
-    else if (arg == "--lossless") settings.mode = RateMode::lossless;
-    else if (arg == "--clusters" && has_value) settings.clusters = size_t(std::atoi(argv[++i]));
-    else if (arg == "--no-temporal") settings.temporal_residuals = false;
-    else if (arg == "--no-spatial") settings.spatial_residuals = false;
-    else if (arg == "--no-blend") settings.blend_weights = false;
-    else if (arg == "--no-curvature-refinement") settings.curvature_refinement = false;
-    else if (arg == "--no-motion-refinement") settings.motion_refinement = false;
+    if (arg == "--error" && has_value)
+      settings.mode = RateMode::error, settings.target = std::atof(argv[++i]);
+    else if (arg == "--bpvf" && has_value)
+      settings.mode = RateMode::bpvf, settings.target = std::atof(argv[++i]);
+    else if (arg == "--lossless")
+      settings.mode = RateMode::lossless;
+    else if (arg == "--clusters" && has_value)
+      settings.clusters = size_t(std::atoi(argv[++i]));
+    else if (arg == "--no-temporal")
+      settings.temporal_residuals = false;
+    else if (arg == "--no-spatial")
+      settings.spatial_residuals = false;
+    else if (arg == "--no-blend")
+      settings.blend_weights = false;
+    else if (arg == "--no-curvature-refinement")
+      settings.curvature_refinement = false;
+    else if (arg == "--no-motion-refinement")
+      settings.motion_refinement = false;
     else {
       std::fprintf(stderr, "codec_sequence: unknown option %s\n", arg.c_str());
       return 2;
@@ -57,20 +67,7 @@ int main(int argc, char** argv) {
   size_t frame_count = 0;
   for (const FrameSequence& clip : clips) frame_count += clip.frame_count;
 
-  std::vector<float> base(clips[0].frame(0), clips[0].frame(0) + vertex_count * 3);
-  float low[3], high[3];
-  for (int c = 0; c < 3; ++c) low[c] = high[c] = base[size_t(c)];
-  for (size_t v = 0; v < vertex_count; ++v)
-    for (int c = 0; c < 3; ++c) {
-      low[c] = std::min(low[c], base[v * 3 + size_t(c)]);
-      high[c] = std::max(high[c], base[v * 3 + size_t(c)]);
-    }
-  const float range = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
-  for (size_t v = 0; v < vertex_count; ++v)
-    for (int c = 0; c < 3; ++c) {
-      float& x = base[v * 3 + size_t(c)];
-      x = low[c] + std::round((x - low[c]) / range * 16383) * range / 16383;
-    }
+  const std::vector<float> base = bench::stand_in_base(clips[0]);
 
   std::vector<uint8_t> stream;
   EncodeReport report;
@@ -93,18 +90,19 @@ int main(int argc, char** argv) {
   ErrorAccumulator accumulator;
   for (size_t c = 0; c < clips.size(); ++c) {
     closed_loop = closed_loop && decoded[c].positions == reconstruction[c].positions;
-    exact = exact && std::memcmp(decoded[c].positions.data(), clips[c].positions.data(), clips[c].positions.size() * 4) == 0;
+    exact = exact &&
+            std::memcmp(decoded[c].positions.data(), clips[c].positions.data(), clips[c].positions.size() * 4) == 0;
     accumulator.add(clips[c], decoded[c]);
   }
   const ErrorMetrics metrics = accumulator.result();
-  std::printf("%s: V=%zu F=%zu K=%zu E(Pi) %.6f -> %.6f | stream %zu B (motion %zu, residuals %zu) %.3f bpvf | "
-              "KG %.4f %% RMSE/diag %.2e | encode %.0f ms (segmentation %.0f, motion %.0f, prediction %.0f, rate "
-              "control %.0f, entropy %.0f) decode %.1f ms | decode == encoder: %s%s\n",
-              argv[1], vertex_count, frame_count, report.clusters, report.e_pi_before_refinement, report.e_pi,
-              stream.size(), report.bytes_motion, report.bytes_residuals,
-              bits_per_vertex_frame(stream.size(), vertex_count, frame_count), metrics.kg_percent,
-              metrics.rmse_over_diagonal, encode_ms, report.ms_segmentation, report.ms_motion, report.ms_prediction,
-              report.ms_rate_control, report.ms_entropy, decode_ms, closed_loop ? "yes" : "NO",
-              settings.mode == RateMode::lossless ? (exact ? " | lossless: bit-exact" : " | lossless: NOT EXACT") : "");
+  std::printf(
+      "%s: V=%zu F=%zu K=%zu E(Pi) %.6f -> %.6f | stream %zu B (motion %zu, residuals %zu) %.3f bpvf | "
+      "KG %.4f %% RMSE/diag %.2e | encode %.0f ms (segmentation %.0f, motion %.0f, prediction %.0f, rate "
+      "control %.0f, entropy %.0f) decode %.1f ms | decode == encoder: %s%s\n",
+      argv[1], vertex_count, frame_count, report.clusters, report.e_pi_before_refinement, report.e_pi, stream.size(),
+      report.bytes_motion, report.bytes_residuals, bits_per_vertex_frame(stream.size(), vertex_count, frame_count),
+      metrics.kg_percent, metrics.rmse_over_diagonal, encode_ms, report.ms_segmentation, report.ms_motion,
+      report.ms_prediction, report.ms_rate_control, report.ms_entropy, decode_ms, closed_loop ? "yes" : "NO",
+      settings.mode == RateMode::lossless ? (exact ? " | lossless: bit-exact" : " | lossless: NOT EXACT") : "");
   return closed_loop ? 0 : 1;
 }

@@ -56,9 +56,9 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
 double frame_spread(const std::vector<FrameSequence>& clips);
 
 // The mean residual quantizer step a KG error target implies if the whole error were uniform quantization
-// noise: sqrt(12 · spread / (3 V F)) · E / 100. The encoder's first guess, and the scale the container
-// chooses the base mesh's position precision by.
-double expected_residual_step(const std::vector<FrameSequence>& clips, double kg_percent);
+// noise: sqrt(12 · spread / (3 V F)) · E / 100, spread = frame_spread(clips). The encoder's first guess, and
+// the scale the container chooses the base mesh's position precision by.
+double expected_residual_step(const std::vector<FrameSequence>& clips, double spread, double kg_percent);
 
 // Decodes a stream against the base mesh: positions (V × 3) and triangles (T × 3 indices into V, as the
 // encoder's clips had them). The clips come back with their positions (frame times are the container's

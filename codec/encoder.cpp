@@ -114,6 +114,20 @@ void quantize_weights(const ClusterWeights& weights, StreamContent& content) {
   }
 }
 
+// The quantized motion (quantize_motion) and weights of `content`: the weights fitted (Eq. 3, or one-hot without
+// blending) to the dequantized motion, as the decoder will have it.
+void quantize_motion_and_weights(const AffineMotion& fitted, double linear_step, double translation_step,
+                                 const std::vector<float>& base_welded, const Trajectories& frames,
+                                 const Clusters& clusters, const VertexAdjacency& adjacency, bool blend,
+                                 StreamContent& content) {
+  quantize_motion(fitted, linear_step, translation_step, content);
+  quantize_weights(
+      blend ? fit_cluster_weights(base_welded.data(), frames, clusters, dequantized_motion(content, base_welded),
+                                  adjacency.offset, adjacency.neighbour, 2, 4)
+            : own_cluster_weights(clusters),
+      content);
+}
+
 }  // namespace
 
 // ‖A − E(A)‖²_F over the original vertices of every frame (the KG error's denominator).
@@ -133,10 +147,10 @@ double frame_spread(const std::vector<FrameSequence>& clips) {
   return spread;
 }
 
-double expected_residual_step(const std::vector<FrameSequence>& clips, double kg_percent) {
+double expected_residual_step(const std::vector<FrameSequence>& clips, double spread, double kg_percent) {
   size_t samples = 0;
   for (const FrameSequence& clip : clips) samples += 3 * clip.vertex_count * clip.frame_count;
-  return std::sqrt(12.0 * frame_spread(clips) / double(std::max<size_t>(samples, 1))) * kg_percent / 100.0;
+  return std::sqrt(12.0 * spread / double(std::max<size_t>(samples, 1))) * kg_percent / 100.0;
 }
 
 Status encode_animation(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
@@ -195,7 +209,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   const double spread = frame_spread(clips);
   double mean_step = std::sqrt(12.0 * std::max(report.e_pi_before_refinement, 1e-12)) *
                      bounding_box_diagonal(base.data(), vertex_count) * 0.1;
-  if (settings.mode == RateMode::error) mean_step = expected_residual_step(clips, settings.target);
+  if (settings.mode == RateMode::error) mean_step = expected_residual_step(clips, spread, settings.target);
 
   // The cost of a candidate segmentation for the automatic K, smaller is better: with an error target, the
   // estimated stream bits at the target distortion; with a rate target, the estimated log distortion at the
@@ -233,13 +247,8 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
     trial.labels = candidate.label;
     const AffineMotion motion = fit_affine_motion(base_welded.data(), sample, candidate);
     const double motion_step = kMotionStepRatio * mean_step;
-    quantize_motion(motion, motion_step / cluster_radius(base_welded, motion.centroid, candidate.label), motion_step,
-                    trial);
-    quantize_weights(settings.blend_weights ? fit_cluster_weights(base_welded.data(), sample, candidate,
-                                                                  dequantized_motion(trial, base_welded),
-                                                                  adjacency.offset, adjacency.neighbour, 2, 4)
-                                            : own_cluster_weights(candidate),
-                     trial);
+    quantize_motion_and_weights(motion, motion_step / cluster_radius(base_welded, motion.centroid, candidate.label),
+                                motion_step, base_welded, sample, candidate, adjacency, settings.blend_weights, trial);
     const std::vector<double> trial_predictions = predicted_frames(trial, base_welded);
     const std::vector<double> steps = {mean_step, 2 * mean_step};
     SubbandCurve measured[3];
@@ -355,14 +364,9 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   // cluster radius), and the predictions they give.
   auto prepare_motion = [&](double motion_step) {
     auto begin = Clock::now();
-    quantize_motion(fitted, settings.mode == RateMode::lossless ? 1e-6 : motion_step / radius,
-                    settings.mode == RateMode::lossless ? 1e-6 * radius : motion_step, content);
-    const AffineMotion motion = dequantized_motion(content, base_welded);
-    const ClusterWeights weights = settings.blend_weights
-                                       ? fit_cluster_weights(base_welded.data(), trajectories, clusters, motion,
-                                                             adjacency.offset, adjacency.neighbour, 2, 4)
-                                       : own_cluster_weights(clusters);
-    quantize_weights(weights, content);
+    quantize_motion_and_weights(fitted, settings.mode == RateMode::lossless ? 1e-6 : motion_step / radius,
+                                settings.mode == RateMode::lossless ? 1e-6 * radius : motion_step, base_welded,
+                                trajectories, clusters, adjacency, settings.blend_weights, content);
     report.ms_motion += milliseconds_since(begin);
     begin = Clock::now();
     predictions = predicted_frames(content, base_welded);

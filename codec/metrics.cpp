@@ -6,17 +6,22 @@
 
 namespace segmorph {
 
-double bounding_box_diagonal(const float* positions, size_t vertex_count) {
-  if (vertex_count == 0) return 0;
-  double low[3], high[3];
+void bounding_box(const float* positions, size_t vertex_count, float low[3], float high[3]) {
   for (int c = 0; c < 3; ++c) low[c] = high[c] = positions[c];
   for (size_t v = 1; v < vertex_count; ++v)
     for (int c = 0; c < 3; ++c) {
-      low[c] = std::min(low[c], double(positions[v * 3 + size_t(c)]));
-      high[c] = std::max(high[c], double(positions[v * 3 + size_t(c)]));
+      low[c] = std::min(low[c], positions[v * 3 + size_t(c)]);
+      high[c] = std::max(high[c], positions[v * 3 + size_t(c)]);
     }
-  return std::sqrt((high[0] - low[0]) * (high[0] - low[0]) + (high[1] - low[1]) * (high[1] - low[1]) +
-                   (high[2] - low[2]) * (high[2] - low[2]));
+}
+
+double bounding_box_diagonal(const float* positions, size_t vertex_count) {
+  if (vertex_count == 0) return 0;
+  float low[3], high[3];
+  bounding_box(positions, vertex_count, low, high);
+  double squared = 0;
+  for (int c = 0; c < 3; ++c) squared += (double(high[c]) - low[c]) * (double(high[c]) - low[c]);
+  return std::sqrt(squared);
 }
 
 void ErrorAccumulator::add(const FrameSequence& original, const FrameSequence& decoded) {

@@ -12,6 +12,9 @@
 
 namespace segmorph {
 
+// The axis-aligned bounding box of V × 3 positions (V ≥ 1).
+void bounding_box(const float* positions, size_t vertex_count, float low[3], float high[3]);
+
 // Length of the diagonal of the axis-aligned bounding box of V × 3 positions (0 when V = 0).
 double bounding_box_diagonal(const float* positions, size_t vertex_count);
 

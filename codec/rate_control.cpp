@@ -42,16 +42,6 @@ struct EntropyCounter {
   }
 };
 
-}  // namespace
-
-std::vector<double> candidate_steps(double around) {
-  std::vector<double> steps;
-  for (int j = -24; j <= 24; ++j) steps.push_back(around * std::exp2(j / 4.0));
-  return steps;
-}
-
-namespace {
-
 constexpr double kIndexLimit = 1 << 30;
 
 // One vertex at `count` lanes (an axis and a step each): the residual quantized as the encoder does

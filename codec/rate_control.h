@@ -17,9 +17,6 @@ struct SubbandCurve {
   std::vector<double> step, distortion, bits;
 };
 
-// Candidate steps: `around` × 2^(j/4) for j in [−24, 24].
-std::vector<double> candidate_steps(double around);
-
 // Closed-loop D(q) and R(q) of the three subbands at more candidate steps (steps[axis], any number each; the
 // measurements are appended to curves[axis]): the decoder's residual loop (reconstruction.h) with the content's
 // flags and clips. predictions, targets: F × W × 3; multiplicity: W (original vertices per welded vertex).

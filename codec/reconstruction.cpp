@@ -127,25 +127,4 @@ void ResidualReconstructor::start_clip() {
   std::fill(previous_.begin(), previous_.end(), 0.0);
 }
 
-std::vector<float> reconstruct_welded(const StreamContent& content, const ResidualTraversal& traversal,
-                                      const std::vector<double>& predictions) {
-  const size_t row = size_t(content.welded_count) * 3;
-  std::vector<float> frames(predictions.size());
-  std::vector<int64_t> symbols(row);
-  ResidualReconstructor reconstructor(content, traversal);
-  size_t frame = 0;
-  for (uint32_t frames_in_clip : content.clip_frames) {
-    reconstructor.start_clip();
-    for (uint32_t f = 0; f < frames_in_clip; ++f, ++frame) {
-      // The frame's symbols, read front to back first (the traversal's order is not memory order).
-      std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, symbols.begin());
-      float* out = &frames[frame * row];
-      reconstructor.frame(
-          &predictions[frame * row], [&](size_t i, double, double) { return symbols[i]; },
-          [&](size_t i, float x) { out[i] = x; });
-    }
-  }
-  return frames;
-}
-
 }  // namespace segmorph

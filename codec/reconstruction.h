@@ -95,10 +95,6 @@ class ResidualReconstructor {
 Status reconstruct_clips(const StreamContent& content, const std::vector<float>& base,
                          const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips);
 
-// Frames (welded, F × W × 3 floats) of a complete content.
-std::vector<float> reconstruct_welded(const StreamContent& content, const ResidualTraversal& traversal,
-                                      const std::vector<double>& predictions);
-
 }  // namespace segmorph
 
 #include "reconstruction_inl.h"

@@ -20,7 +20,7 @@ constexpr uint8_t kKnownFlags = kFlagLossless | kFlagTemporalResiduals | kFlagSp
 // Limits a decoder enforces before allocating (a stream claiming more is refused as bad data).
 constexpr uint32_t kMaxClips = 4096;
 constexpr int64_t kMaxLosslessResidual = (int64_t(1) << 32) - 1;  // |difference of two ordered_bits values|
-constexpr uint64_t kMaxVertexFrames = uint64_t(1) << 28;  // W × F: 268 million positions, 3 GiB of floats
+constexpr uint64_t kMaxVertexFrames = uint64_t(1) << 28;          // W × F: 268 million positions, 3 GiB of floats
 constexpr uint32_t kMaxClusters = 65535;
 constexpr uint32_t kMaxExtraWeights = 3;  // clusters blended into a vertex besides its own
 constexpr int kMaxWeightBits = 16;        // weights are multiples of 2^-bits

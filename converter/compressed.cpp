@@ -5,6 +5,7 @@
 
 #include "accessor.h"
 #include "bake.h"
+#include "metrics.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {
@@ -12,10 +13,14 @@ namespace {
 
 int type_of_components(int components) {
   switch (components) {
-    case 1: return TINYGLTF_TYPE_SCALAR;
-    case 2: return TINYGLTF_TYPE_VEC2;
-    case 3: return TINYGLTF_TYPE_VEC3;
-    default: return TINYGLTF_TYPE_VEC4;
+    case 1:
+      return TINYGLTF_TYPE_SCALAR;
+    case 2:
+      return TINYGLTF_TYPE_VEC2;
+    case 3:
+      return TINYGLTF_TYPE_VEC3;
+    default:
+      return TINYGLTF_TYPE_VEC4;
   }
 }
 
@@ -34,13 +39,9 @@ int automatic_position_bits(const std::vector<float>& positions, const std::vect
                             const CodecSettings& settings) {
   if (settings.mode != RateMode::error || positions.empty()) return kDefaultPositionBits;
   float low[3], high[3];
-  for (int c = 0; c < 3; ++c) low[c] = high[c] = positions[size_t(c)];
-  for (size_t i = 0; i < positions.size(); ++i) {
-    low[i % 3] = std::min(low[i % 3], positions[i]);
-    high[i % 3] = std::max(high[i % 3], positions[i]);
-  }
+  bounding_box(positions.data(), positions.size() / 3, low, high);
   const double extent = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
-  const double step = expected_residual_step(clips, settings.target) * kBaseStepRatio;
+  const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio;
   if (!(extent > 0) || !(step > 0)) return kDefaultPositionBits;
   const double bits = std::round(std::log2(extent / step + 1));
   return int(std::clamp(bits, double(kMinPositionBits), double(kMaxPositionBits)));
@@ -101,7 +102,8 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
     for (size_t p = 0; p < mesh.primitives.size(); ++p) {
       tinygltf::Primitive& primitive = mesh.primitives[p];
       const SampledPrimitive& frames = node.primitives[p];
-      const std::string what = "mesh " + std::to_string(model.nodes[size_t(host)].mesh) + " primitive " + std::to_string(p);
+      const std::string what =
+          "mesh " + std::to_string(model.nodes[size_t(host)].mesh) + " primitive " + std::to_string(p);
       if (frames.clips[0].triangles.empty())
         return Status(StatusCode::unsupported, what + ": only triangle primitives can be encoded");
       progress("encoding " + what + " (" + std::to_string(frames.clips[0].vertex_count) + " vertices)");
@@ -113,9 +115,12 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       for (const auto& [semantic, accessor] : primitive.attributes) {
         BaseMeshAttribute attribute;
         attribute.semantic = semantic;
-        SEGMORPH_RETURN_IF_ERROR(read_floats(model, accessor, what + " " + semantic, attribute.values, &attribute.components));
-        if (semantic == "POSITION") base.attributes.insert(base.attributes.begin(), std::move(attribute));
-        else base.attributes.push_back(std::move(attribute));
+        SEGMORPH_RETURN_IF_ERROR(
+            read_floats(model, accessor, what + " " + semantic, attribute.values, &attribute.components));
+        if (semantic == "POSITION")
+          base.attributes.insert(base.attributes.begin(), std::move(attribute));
+        else
+          base.attributes.push_back(std::move(attribute));
       }
       DracoSettings primitive_draco = draco;
       if (primitive_draco.position_bits == 0)
@@ -124,7 +129,8 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       std::vector<uint8_t> draco_bytes;
       SEGMORPH_RETURN_IF_ERROR(encode_draco_base_mesh(base, primitive_draco, draco_bytes, draco_primitive.attributes));
       BaseMesh decoded;
-      SEGMORPH_RETURN_IF_ERROR(decode_draco_base_mesh(draco_bytes.data(), draco_bytes.size(), draco_primitive.attributes, decoded));
+      SEGMORPH_RETURN_IF_ERROR(
+          decode_draco_base_mesh(draco_bytes.data(), draco_bytes.size(), draco_primitive.attributes, decoded));
       // The frames in the order of the vertices the decoder gets back (Draco's edgebreaker reorders them, and may
       // merge duplicates; each decoded vertex follows the original it came from).
       std::vector<uint32_t> source;
@@ -141,7 +147,8 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
         for (size_t f = 0; f < clip.frame_count; ++f)
           for (size_t v = 0; v < decoded.vertex_count; ++v)
             for (int k = 0; k < 3; ++k)
-              out.positions[(f * decoded.vertex_count + v) * 3 + size_t(k)] = clip.frame(f)[size_t(source[v]) * 3 + size_t(k)];
+              out.positions[(f * decoded.vertex_count + v) * 3 + size_t(k)] =
+                  clip.frame(f)[size_t(source[v]) * 3 + size_t(k)];
       }
 
       // The animation, against the base positions the decoder will have.
@@ -158,8 +165,8 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
                                                 &encode_report, &reconstruction));
       // Never write a stream a decoder would read differently: decode it as a reader will (a few tens of
       // milliseconds) and compare with the encoder's own reconstruction.
-      const Status check_status = decode_animation(stream.data(), stream.size(), decoded.attributes[0].values,
-                                                   decoded.triangles, check);
+      const Status check_status =
+          decode_animation(stream.data(), stream.size(), decoded.attributes[0].values, decoded.triangles, check);
       bool same = check_status.ok() && check.size() == reconstruction.size();
       for (size_t c = 0; same && c < check.size(); ++c) same = check[c].positions == reconstruction[c].positions;
       if (!same)
@@ -179,9 +186,9 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       for (const BaseMeshAttribute& attribute : decoded.attributes) {
         const int type = type_of_components(attribute.components);
         // The data is Draco's; POSITION keeps its bounds, as glTF requires.
-        out.attributes[attribute.semantic] = attribute.semantic == "POSITION"
-                                                 ? writer.add_described(attribute.values.data(), decoded.vertex_count, type)
-                                                 : writer.add_zeros(decoded.vertex_count, type, false);
+        out.attributes[attribute.semantic] =
+            attribute.semantic == "POSITION" ? writer.add_described(attribute.values.data(), decoded.vertex_count, type)
+                                             : writer.add_zeros(decoded.vertex_count, type, false);
       }
       // The indices accessor describes Draco's triangles and has no bufferView, as KHR_draco_mesh_compression
       // asks (validators warn about a TRIANGLES primitive whose vertex count is not a multiple of 3 without
@@ -223,7 +230,8 @@ Status decode_draco_primitives(tinygltf::Model& model) {
       SEGMORPH_RETURN_IF_ERROR(parse_draco_primitive(it->second, draco));
       const unsigned char* data = nullptr;
       size_t size = 0;
-      SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, draco.buffer_view, what + " " + kDracoExtensionName, &data, &size));
+      SEGMORPH_RETURN_IF_ERROR(
+          buffer_view_bytes(model, draco.buffer_view, what + " " + kDracoExtensionName, &data, &size));
       BaseMesh decoded;
       const Status status = decode_draco_base_mesh(data, size, draco.attributes, decoded);
       if (!status.ok()) return Status(status.code(), what + ": " + status.message());
@@ -232,10 +240,11 @@ Status decode_draco_primitives(tinygltf::Model& model) {
         if (accessor == primitive.attributes.end() || accessor->second < 0 ||
             size_t(accessor->second) >= model.accessors.size() ||
             model.accessors[size_t(accessor->second)].count != decoded.vertex_count)
-          return Status(StatusCode::bad_data, what + ": Draco's " + attribute.semantic + " disagrees with its accessor");
-        accessor->second = writer.add_floats(attribute.values.data(), decoded.vertex_count,
-                                             type_of_components(attribute.components), attribute.semantic == "POSITION",
-                                             TINYGLTF_TARGET_ARRAY_BUFFER);
+          return Status(StatusCode::bad_data,
+                        what + ": Draco's " + attribute.semantic + " disagrees with its accessor");
+        accessor->second =
+            writer.add_floats(attribute.values.data(), decoded.vertex_count, type_of_components(attribute.components),
+                              attribute.semantic == "POSITION", TINYGLTF_TARGET_ARRAY_BUFFER);
       }
       if (primitive.indices >= 0 && (size_t(primitive.indices) >= model.accessors.size() ||
                                      model.accessors[size_t(primitive.indices)].count != decoded.triangles.size()))
@@ -276,7 +285,8 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
     std::vector<int> users;
     for (size_t n = 0; n < model.nodes.size(); ++n)
       if (model.nodes[n].mesh == int(m)) users.push_back(int(n));
-    if (users.size() != 1) return Status(StatusCode::bad_data, what + ": a compressed mesh must be used by exactly one node");
+    if (users.size() != 1)
+      return Status(StatusCode::bad_data, what + ": a compressed mesh must be used by exactly one node");
     AnimatedNode node;
     node.node = users[0];
     node.mesh = int(m);
@@ -311,34 +321,18 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
       const std::string what = "mesh " + std::to_string(animated[i].mesh) + " primitive " + std::to_string(p);
       SampledPrimitive out;
       out.primitive = int(p);
-      int components = 0;
-      auto position = primitive.attributes.find("POSITION");
-      if (position == primitive.attributes.end()) return Status(StatusCode::bad_data, what + " has no POSITION");
-      SEGMORPH_RETURN_IF_ERROR(read_floats(model, position->second, what + " POSITION", out.rest_positions, &components));
-      if (components != 3) return Status(StatusCode::bad_data, what + ": POSITION must be VEC3");
-      // Checked as sample_node checks them: baking reads one normal and one tangent per vertex.
-      auto normal = primitive.attributes.find("NORMAL");
-      if (normal != primitive.attributes.end()) {
-        SEGMORPH_RETURN_IF_ERROR(read_floats(model, normal->second, what + " NORMAL", out.rest_normals, &components));
-        if (components != 3 || out.rest_normals.size() != out.rest_positions.size())
-          return Status(StatusCode::bad_data, what + ": NORMAL must be VEC3 with one element per vertex");
-      }
-      auto tangent = primitive.attributes.find("TANGENT");
-      if (tangent != primitive.attributes.end()) {
-        SEGMORPH_RETURN_IF_ERROR(
-            read_floats(model, tangent->second, what + " TANGENT", out.rest_tangents, &components));
-        if (components != 4 || out.rest_tangents.size() != out.rest_positions.size() / 3 * 4)
-          return Status(StatusCode::bad_data, what + ": TANGENT must be VEC4 with one element per vertex");
-      }
+      SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, out));
       std::vector<uint32_t> triangles;
       if (primitive.indices < 0) return Status(StatusCode::bad_data, what + ": a compressed primitive needs indices");
       SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", triangles));
       for (uint32_t index : triangles)
-        if (index >= out.rest_positions.size() / 3) return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
+        if (index >= out.rest_positions.size() / 3)
+          return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
 
       const unsigned char* data = nullptr;
       size_t size = 0;
-      SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, streams[i][p].buffer_view, what + " " + kExtensionName, &data, &size));
+      SEGMORPH_RETURN_IF_ERROR(
+          buffer_view_bytes(model, streams[i][p].buffer_view, what + " " + kExtensionName, &data, &size));
       found.animation_bytes += size;
       ++found.primitives;
       const Status status = decode_animation(data, size, out.rest_positions, triangles, out.clips);
@@ -351,7 +345,8 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
         if (clip.times.size() != clip.frame_count)
           return Status(StatusCode::bad_data, what + ": a clip's times disagree with its frame count");
         for (size_t f = 1; f < clip.times.size(); ++f)
-          if (!(clip.times[f] > clip.times[f - 1])) return Status(StatusCode::bad_data, what + ": clip times must increase");
+          if (!(clip.times[f] > clip.times[f - 1]))
+            return Status(StatusCode::bad_data, what + ": clip times must increase");
         clip.triangles = triangles;
       }
       node.primitives.push_back(std::move(out));
@@ -359,8 +354,9 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
     }
   }
   for (tinygltf::Animation& animation : model.animations)
-    animation.channels.erase(std::remove_if(animation.channels.begin(), animation.channels.end(), is_placeholder_channel),
-                             animation.channels.end());
+    animation.channels.erase(
+        std::remove_if(animation.channels.begin(), animation.channels.end(), is_placeholder_channel),
+        animation.channels.end());
   SEGMORPH_RETURN_IF_ERROR(bake_model(model, scene, sampled));
   undeclare_extension(model, kExtensionName);
   if (sizes) *sizes = found;

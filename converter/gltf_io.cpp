@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -172,18 +173,14 @@ void put_u32(std::string& out, size_t at, uint32_t value) {
   for (int i = 0; i < 4; ++i) out[at + size_t(i)] = char(value >> (8 * i));
 }
 
-// The file with its JSON checked by check_json_nesting and passed through drop_draco_indices, in `rewritten`;
-// empty when nothing changed (or the GLB is malformed, which tinygltf then reports).
-Status rewrite_for_tinygltf(const std::string& path, bool binary, std::string& rewritten) {
-  rewritten.clear();
-  std::ifstream file(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+// A whole file's bytes made safe and acceptable for tinygltf 2.7: the JSON checked by check_json_nesting and
+// passed through drop_draco_indices (rewritten in place when that changes it); a GLB's chunk lengths checked
+// against its size. A GLB without a JSON chunk first is left for tinygltf to report.
+Status prepare_for_tinygltf(bool binary, std::string& bytes) {
   bool changed = false;
   if (!binary) {
     SEGMORPH_RETURN_IF_ERROR(check_json_nesting(bytes));
-    SEGMORPH_RETURN_IF_ERROR(drop_draco_indices(bytes, changed));
-    if (changed) rewritten = std::move(bytes);
-    return Status::Ok();
+    return drop_draco_indices(bytes, changed);
   }
   // GLB: a 12-byte header, then the JSON chunk (length, type, data), then the rest, kept as it is.
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
@@ -200,11 +197,11 @@ Status rewrite_for_tinygltf(const std::string& path, bool binary, std::string& r
   SEGMORPH_RETURN_IF_ERROR(drop_draco_indices(json, changed));
   if (!changed) return Status::Ok();
   while (json.size() % 4) json += ' ';
-  rewritten.assign(bytes, 0, 20);
-  rewritten += json;
+  std::string rewritten = bytes.substr(0, 20) + json;
   rewritten.append(bytes, size_t(20 + json_length), std::string::npos);
   put_u32(rewritten, 8, uint32_t(rewritten.size()));
   put_u32(rewritten, 12, uint32_t(json.size()));
+  bytes = std::move(rewritten);
   return Status::Ok();
 }
 
@@ -220,40 +217,32 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
   if (!file || stat(path.c_str(), &info) != 0)
     return Status(StatusCode::io_error, "cannot open: " + std::string(std::strerror(errno)));
   if (S_ISDIR(info.st_mode)) return Status(StatusCode::io_error, "is a directory, not a glTF file");
-  char head[4] = {};
-  file.read(head, 4);
-  const bool binary = file.gcount() == 4 && std::memcmp(head, "glTF", 4) == 0;
+  // Read once; tinygltf parses from memory (its sizes are 32-bit).
+  std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (bytes.size() > UINT32_MAX)
+    return Status(StatusCode::unsupported, "larger than 4 GiB, which the glTF loader cannot read");
+  const bool binary = bytes.compare(0, 4, "glTF") == 0;
   if (!binary) {
     // A JSON glTF starts with '{' after optional white space and byte-order mark.
-    file.clear();
-    file.seekg(0);
-    int c;
-    while ((c = file.get()) != EOF && (std::isspace(c) || c == 0xEF || c == 0xBB || c == 0xBF)) {
-    }
-    if (c != '{') return Status(StatusCode::bad_data, "not a glTF file (neither GLB nor JSON)");
+    const size_t first = bytes.find_first_not_of(" \t\n\r\v\f\xEF\xBB\xBF");
+    if (first == std::string::npos || bytes[first] != '{')
+      return Status(StatusCode::bad_data, "not a glTF file (neither GLB nor JSON)");
   }
-  file.close();
 
-  // Valid files tinygltf 2.7 refuses are rewritten in memory first, and JSON that would crash it is refused
-  // (json_prepass.h); the rest load as they are.
-  std::string rewritten;
-  SEGMORPH_RETURN_IF_ERROR(rewrite_for_tinygltf(path, binary, rewritten));
+  // Valid files tinygltf 2.7 refuses are rewritten first, and files that would crash it are refused
+  // (json_prepass.h, prepare_for_tinygltf).
+  SEGMORPH_RETURN_IF_ERROR(prepare_for_tinygltf(binary, bytes));
 
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keep_encoded_image, nullptr);
   std::string error, warning;
   const size_t slash = path.find_last_of('/');
   const std::string directory = slash == std::string::npos ? std::string() : path.substr(0, slash);
-  bool loaded;
-  if (!rewritten.empty())
-    loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
-                                                  reinterpret_cast<const unsigned char*>(rewritten.data()),
-                                                  unsigned(rewritten.size()), directory)
-                    : loader.LoadASCIIFromString(&model, &error, &warning, rewritten.data(), unsigned(rewritten.size()),
-                                                 directory);
-  else
-    loaded = binary ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
-                    : loader.LoadASCIIFromFile(&model, &error, &warning, path);
+  const bool loaded =
+      binary
+          ? loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                        unsigned(bytes.size()), directory)
+          : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), unsigned(bytes.size()), directory);
   if (!loaded) return Status(StatusCode::bad_data, "cannot parse glTF: " + one_line(error.empty() ? warning : error));
   if (warnings && !warning.empty()) warnings->push_back(one_line(warning));
 

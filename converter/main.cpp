@@ -8,8 +8,8 @@
 #include "bake.h"
 #include "comparison.h"
 #include "compressed.h"
-#include "metrics.h"
 #include "gltf_io.h"
+#include "metrics.h"
 #include "sample.h"
 #include "topology.h"
 
@@ -90,12 +90,14 @@ void progress(const Options& options, const std::string& message) {
 std::string json_string(const std::string& s) {
   std::string out = "\"";
   for (unsigned char c : s) {
-    if (c == '"' || c == '\\') out += '\\', out += char(c);
+    if (c == '"' || c == '\\')
+      out += '\\', out += char(c);
     else if (c < 0x20) {
       char buffer[8];
       std::snprintf(buffer, sizeof(buffer), "\\u%04x", c);
       out += buffer;
-    } else out += char(c);
+    } else
+      out += char(c);
   }
   return out + "\"";
 }
@@ -105,7 +107,7 @@ struct SampledFile {
   tinygltf::Model model;
   Scene scene;
   std::vector<SampledNode> sampled;  // empty after load_and_analyze alone
-  DecodedSizes decoded;  // what an encoded file held
+  DecodedSizes decoded;              // what an encoded file held
 };
 
 // Reads `path`, decodes what is encoded and finds the animated nodes.
@@ -152,19 +154,18 @@ int run_info(const Options& options) {
       const FrameSequence& first = primitive.clips[0];
       const WeldedTopology topology = weld_topology(primitive.clips);
       if (primitive_count++) json += ",";
-      json += "{\"node\":" + std::to_string(animated.node) + ",\"node_name\":" +
-              json_string(model.nodes[size_t(animated.node)].name) + ",\"mesh\":" + std::to_string(animated.mesh) +
-              ",\"primitive\":" + std::to_string(primitive.primitive) + ",\"kind\":" + json_string(animated.kind()) +
-              ",\"vertices\":" + std::to_string(first.vertex_count) + ",\"triangles\":" +
-              std::to_string(first.triangle_count()) + ",\"welded_vertices\":" +
-              std::to_string(topology.welded_count()) + ",\"connected_components\":" +
-              std::to_string(topology.component_count) + ",\"clips\":[";
+      json += "{\"node\":" + std::to_string(animated.node) +
+              ",\"node_name\":" + json_string(model.nodes[size_t(animated.node)].name) +
+              ",\"mesh\":" + std::to_string(animated.mesh) + ",\"primitive\":" + std::to_string(primitive.primitive) +
+              ",\"kind\":" + json_string(animated.kind()) + ",\"vertices\":" + std::to_string(first.vertex_count) +
+              ",\"triangles\":" + std::to_string(first.triangle_count()) +
+              ",\"welded_vertices\":" + std::to_string(topology.welded_count()) +
+              ",\"connected_components\":" + std::to_string(topology.component_count) + ",\"clips\":[";
       text += node_name(model, animated.node) + ", mesh " + std::to_string(animated.mesh) + " primitive " +
-              std::to_string(primitive.primitive) + ": " + animated.kind() + ", " +
-              std::to_string(first.vertex_count) + " vertices (" + std::to_string(topology.welded_count()) +
-              " welded), " + std::to_string(first.triangle_count()) + " triangles, " +
-              std::to_string(topology.component_count) + " connected component" +
-              (topology.component_count == 1 ? "" : "s") + "\n";
+              std::to_string(primitive.primitive) + ": " + animated.kind() + ", " + std::to_string(first.vertex_count) +
+              " vertices (" + std::to_string(topology.welded_count()) + " welded), " +
+              std::to_string(first.triangle_count()) + " triangles, " + std::to_string(topology.component_count) +
+              " connected component" + (topology.component_count == 1 ? "" : "s") + "\n";
       for (size_t c = 0; c < primitive.clips.size(); ++c) {
         const FrameSequence& clip = primitive.clips[c];
         const std::string& name = scene.clips[size_t(animated.clips[c])].name;
@@ -175,7 +176,8 @@ int run_info(const Options& options) {
                       scene.clips[size_t(animated.clips[c])].animation, json_string(name).c_str(), clip.frame_count,
                       duration, bytes);
         text += line;
-        std::snprintf(line, sizeof(line), "%s{\"animation\":%d,\"name\":%s,\"frames\":%zu,\"duration\":%.6g,\"baked_bytes\":%zu}",
+        std::snprintf(line, sizeof(line),
+                      "%s{\"animation\":%d,\"name\":%s,\"frames\":%zu,\"duration\":%.6g,\"baked_bytes\":%zu}",
                       c ? "," : "", scene.clips[size_t(animated.clips[c])].animation, json_string(name).c_str(),
                       clip.frame_count, duration, bytes);
         json += line;
@@ -184,10 +186,12 @@ int run_info(const Options& options) {
     }
   }
   json += "]}";
-  if (options.json) std::printf("%s\n", json.c_str());
-  else std::printf("%s: %zu animated primitive%s, %zu animation%s\n%s", path.c_str(), primitive_count,
-                   primitive_count == 1 ? "" : "s", model.animations.size(), model.animations.size() == 1 ? "" : "s",
-                   text.c_str());
+  if (options.json)
+    std::printf("%s\n", json.c_str());
+  else
+    std::printf("%s: %zu animated primitive%s, %zu animation%s\n%s", path.c_str(), primitive_count,
+                primitive_count == 1 ? "" : "s", model.animations.size(), model.animations.size() == 1 ? "" : "s",
+                text.c_str());
   return 0;
 }
 
@@ -260,18 +264,20 @@ int run_encode(const Options& options) {
   }
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
   if (options.json) {
-    std::printf("{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"primitives\":%zu,\"clusters\":%.0f,"
-                "\"e_pi_before_refinement\":%.6g,\"e_pi\":%.6g,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,"
-                "\"draco_bytes\":%zu,\"animation_bytes\":%zu,\"milliseconds\":{\"segmentation\":%.1f,\"motion\":%.1f,"
-                "\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f}}\n",
-                json_string(path).c_str(), json_string(options.output).c_str(), bytes, report.primitives.size(), clusters,
-                e_pi_before, e_pi, bpvf, vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0,
-                report.draco_bytes, report.animation_bytes, ms[0], ms[1], ms[2], ms[3], ms[4]);
+    std::printf(
+        "{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"primitives\":%zu,\"clusters\":%.0f,"
+        "\"e_pi_before_refinement\":%.6g,\"e_pi\":%.6g,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,"
+        "\"draco_bytes\":%zu,\"animation_bytes\":%zu,\"milliseconds\":{\"segmentation\":%.1f,\"motion\":%.1f,"
+        "\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f}}\n",
+        json_string(path).c_str(), json_string(options.output).c_str(), bytes, report.primitives.size(), clusters,
+        e_pi_before, e_pi, bpvf, vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0,
+        report.draco_bytes, report.animation_bytes, ms[0], ms[1], ms[2], ms[3], ms[4]);
   } else {
-    std::printf("%s: %zu bytes, %.3f bits per vertex per frame (animation %zu bytes, base meshes %zu bytes), "
-                "%zu primitive%s, %.0f clusters, E(Pi) %.6f (before refinement %.6f)\n",
-                options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes, report.primitives.size(),
-                report.primitives.size() == 1 ? "" : "s", clusters, e_pi, e_pi_before);
+    std::printf(
+        "%s: %zu bytes, %.3f bits per vertex per frame (animation %zu bytes, base meshes %zu bytes), "
+        "%zu primitive%s, %.0f clusters, E(Pi) %.6f (before refinement %.6f)\n",
+        options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes, report.primitives.size(),
+        report.primitives.size() == 1 ? "" : "s", clusters, e_pi, e_pi_before);
   }
   return 0;
 }
@@ -286,7 +292,8 @@ int run_decode(const Options& options) {
   if (status.ok()) status = decode_compressed_model(model, &sizes);
   if (!status.ok()) return fail(path, status);
   if (sizes.primitives == 0)
-    return fail(path, Status(StatusCode::nothing_to_do, "not encoded: it has no SEGMORPH_animation_compression primitive"));
+    return fail(path,
+                Status(StatusCode::nothing_to_do, "not encoded: it has no SEGMORPH_animation_compression primitive"));
   progress(options, "writing " + options.output);
   status = save_gltf(model, options.output);
   if (!status.ok()) return fail(options.output, status);
@@ -311,19 +318,22 @@ int run_verify(const Options& options) {
   const double vertex_frames = comparison.vertex_frames;
   const size_t bytes = file_bytes(options.inputs[1], compressed.model);
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
-  const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(compressed.decoded.animation_bytes) / vertex_frames : 0;
+  const double bpvf_animation =
+      vertex_frames > 0 ? 8.0 * double(compressed.decoded.animation_bytes) / vertex_frames : 0;
   if (options.json) {
-    std::printf("{\"original\":%s,\"compressed\":%s,\"vertices\":%zu,\"frames\":%zu,\"vertex_frames\":%.0f,"
-                "\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,\"rmse_over_diag\":%.6g,"
-                "\"max_error_over_diag\":%.6g}\n",
-                json_string(options.inputs[0]).c_str(), json_string(options.inputs[1]).c_str(), comparison.vertices,
-                comparison.frames, vertex_frames, bytes, bpvf, bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal,
-                worst.max_error_over_diagonal);
+    std::printf(
+        "{\"original\":%s,\"compressed\":%s,\"vertices\":%zu,\"frames\":%zu,\"vertex_frames\":%.0f,"
+        "\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,\"rmse_over_diag\":%.6g,"
+        "\"max_error_over_diag\":%.6g}\n",
+        json_string(options.inputs[0]).c_str(), json_string(options.inputs[1]).c_str(), comparison.vertices,
+        comparison.frames, vertex_frames, bytes, bpvf, bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal,
+        worst.max_error_over_diagonal);
   } else {
-    std::printf("%s against %s: %zu vertices, %zu frames, %zu bytes, %.3f bpvf (animation %.3f), KG %.4f %%, "
-                "RMSE %.3g and max error %.3g of the diagonal\n",
-                options.inputs[1].c_str(), options.inputs[0].c_str(), comparison.vertices, comparison.frames, bytes, bpvf,
-                bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal, worst.max_error_over_diagonal);
+    std::printf(
+        "%s against %s: %zu vertices, %zu frames, %zu bytes, %.3f bpvf (animation %.3f), KG %.4f %%, "
+        "RMSE %.3g and max error %.3g of the diagonal\n",
+        options.inputs[1].c_str(), options.inputs[0].c_str(), comparison.vertices, comparison.frames, bytes, bpvf,
+        bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal, worst.max_error_over_diagonal);
   }
   return 0;
 }
@@ -368,22 +378,20 @@ int run(int argc, char** argv) {
       if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
       options.rate_given = true;
       options.codec.mode = RateMode::lossless;
-    } else if (arg == "--clusters") {
+    } else if (arg == "--clusters" || arg == "--position-bits") {
+      const bool clusters = arg == "--clusters";
+      const long low = clusters ? 1 : 8, high = clusters ? 65535 : 30;
       std::string text;
-      if (!value(text)) return usage_error("--clusters needs a number");
+      if (!value(text)) return usage_error(arg + " needs a number");
       char* end = nullptr;
-      const long clusters = std::strtol(text.c_str(), &end, 10);
-      if (end == text.c_str() || *end || clusters < 1 || clusters > 65535)
-        return usage_error("--clusters takes a whole number from 1 to 65535, not '" + text + "'");
-      options.codec.clusters = size_t(clusters);
-    } else if (arg == "--position-bits") {
-      std::string text;
-      if (!value(text)) return usage_error("--position-bits needs a number");
-      char* end = nullptr;
-      const long bits = std::strtol(text.c_str(), &end, 10);
-      if (end == text.c_str() || *end || bits < 8 || bits > 30)
-        return usage_error("--position-bits takes a whole number from 8 to 30, not '" + text + "'");
-      options.draco.position_bits = int(bits);
+      const long number = std::strtol(text.c_str(), &end, 10);
+      if (end == text.c_str() || *end || number < low || number > high)
+        return usage_error(arg + " takes a whole number from " + std::to_string(low) + " to " + std::to_string(high) +
+                           ", not '" + text + "'");
+      if (clusters)
+        options.codec.clusters = size_t(number);
+      else
+        options.draco.position_bits = int(number);
     } else if (arg == "--json") {
       options.json = true;
     } else if (arg == "-q" || arg == "--quiet") {
@@ -427,4 +435,6 @@ int run(int argc, char** argv) {
 }  // namespace
 }  // namespace segmorph
 
-int main(int argc, char** argv) { return segmorph::run(argc, argv); }
+int main(int argc, char** argv) {
+  return segmorph::run(argc, argv);
+}

@@ -29,8 +29,8 @@ void for_each_moving_track(const tinygltf::Model& model, const NodeGraph& graph,
                            const Clip& clip, F f) {
   const std::vector<bool> relevant = skin_dependencies(model, graph, node.skin);
   for (const Track& track : clip.tracks) {
-    const bool moves = track.path == TargetPath::weights ? (node.morphed && track.node == node.node)
-                                                         : relevant[size_t(track.node)];
+    const bool moves =
+        track.path == TargetPath::weights ? (node.morphed && track.node == node.node) : relevant[size_t(track.node)];
     if (moves) f(track);
   }
 }
@@ -49,11 +49,11 @@ std::vector<float> regular_grid(double start, double end, double fps) {
 // The vertex data of one primitive that sampling needs, read and checked once.
 struct PrimitiveInput {
   size_t vertex_count = 0;
-  std::vector<float> positions;              // V × 3
-  std::vector<std::vector<float>> deltas;    // targets × (V × 3); empty vector for a target without POSITION
-  std::vector<uint32_t> influence_offset;    // V + 1 offsets into joints/weights (skinned only)
-  std::vector<uint32_t> influence_joint;     // index into the skin's joints
-  std::vector<double> influence_weight;      // normalized to sum 1 per vertex
+  std::vector<float> positions;            // V × 3
+  std::vector<std::vector<float>> deltas;  // targets × (V × 3); empty vector for a target without POSITION
+  std::vector<uint32_t> influence_offset;  // V + 1 offsets into joints/weights (skinned only)
+  std::vector<uint32_t> influence_joint;   // index into the skin's joints
+  std::vector<double> influence_weight;    // normalized to sum 1 per vertex
 };
 
 Status read_triangles(const tinygltf::Model& model, const tinygltf::Primitive& primitive, size_t vertex_count,
@@ -79,7 +79,8 @@ Status read_triangles(const tinygltf::Model& model, const tinygltf::Primitive& p
       }
       break;
     case TINYGLTF_MODE_TRIANGLE_FAN:
-      for (size_t i = 2; i < indices.size(); ++i) triangles.insert(triangles.end(), {indices[i - 1], indices[i], indices[0]});
+      for (size_t i = 2; i < indices.size(); ++i)
+        triangles.insert(triangles.end(), {indices[i - 1], indices[i], indices[0]});
       break;
     default:
       break;  // points and lines: no surface
@@ -102,12 +103,14 @@ Status read_skin_influences(const tinygltf::Model& model, const tinygltf::Primit
     std::vector<uint32_t> joints;
     std::vector<float> weights;
     int joint_components = 0, weight_components = 0;
-    SEGMORPH_RETURN_IF_ERROR(read_uints(model, joints_it->second, what + " " + joints_it->first, joints, &joint_components));
-    SEGMORPH_RETURN_IF_ERROR(read_floats(model, weights_it->second, what + " " + weights_it->first, weights, &weight_components));
+    SEGMORPH_RETURN_IF_ERROR(
+        read_uints(model, joints_it->second, what + " " + joints_it->first, joints, &joint_components));
+    SEGMORPH_RETURN_IF_ERROR(
+        read_floats(model, weights_it->second, what + " " + weights_it->first, weights, &weight_components));
     if (joint_components != 4 || weight_components != 4 || joints.size() != vertex_count * 4 ||
         weights.size() != vertex_count * 4)
-      return Status(StatusCode::bad_data, what + ": JOINTS_" + std::to_string(set) + "/WEIGHTS_" +
-                                              std::to_string(set) + " must be VEC4 with one element per vertex");
+      return Status(StatusCode::bad_data, what + ": JOINTS_" + std::to_string(set) + "/WEIGHTS_" + std::to_string(set) +
+                                              " must be VEC4 with one element per vertex");
     if (set == 0)
       for (size_t v = 0; v < vertex_count; ++v) first_joint[v] = joints[v * 4];
     for (size_t v = 0; v < vertex_count; ++v)
@@ -192,8 +195,10 @@ Status analyze_scene(const tinygltf::Model& model, Scene& scene) {
     for (size_t c = 0; c < scene.clips.size(); ++c) {
       bool weights = false, skin = false;
       for (const Track& track : scene.clips[c].tracks) {
-        if (track.path == TargetPath::weights) weights = weights || (node.morphed && track.node == int(n));
-        else skin = skin || relevant[size_t(track.node)];
+        if (track.path == TargetPath::weights)
+          weights = weights || (node.morphed && track.node == int(n));
+        else
+          skin = skin || relevant[size_t(track.node)];
       }
       if (weights || skin) node.clips.push_back(int(c));
       node.weights_animated = node.weights_animated || weights;
@@ -203,16 +208,18 @@ Status analyze_scene(const tinygltf::Model& model, Scene& scene) {
   }
   if (scene.animated.empty())
     return Status(StatusCode::nothing_to_do,
-                  model.animations.empty() ? "nothing animated: the file has no animations"
-                                           : "nothing animated: no animation moves morph weights or skin joints of a mesh");
+                  model.animations.empty()
+                      ? "nothing animated: the file has no animations"
+                      : "nothing animated: no animation moves morph weights or skin joints of a mesh");
   return Status::Ok();
 }
 
 std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model, const AnimatedNode& node, int clip,
                                const SampleSettings& settings) {
   std::vector<float> keys;
-  for_each_moving_track(model, scene.graph, node, scene.clips[size_t(clip)],
-                        [&](const Track& track) { keys.insert(keys.end(), track.curve.times.begin(), track.curve.times.end()); });
+  for_each_moving_track(model, scene.graph, node, scene.clips[size_t(clip)], [&](const Track& track) {
+    keys.insert(keys.end(), track.curve.times.begin(), track.curve.times.end());
+  });
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   if (keys.empty()) return keys;
@@ -222,8 +229,31 @@ std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model,
   return regular_grid(start, end, SampleSettings::kDefaultFps);
 }
 
+Status read_rest_attributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive, const std::string& what,
+                            SampledPrimitive& out) {
+  auto position = primitive.attributes.find("POSITION");
+  if (position == primitive.attributes.end()) return Status(StatusCode::bad_data, what + " has no POSITION");
+  int components = 0;
+  SEGMORPH_RETURN_IF_ERROR(read_floats(model, position->second, what + " POSITION", out.rest_positions, &components));
+  if (components != 3) return Status(StatusCode::bad_data, what + ": POSITION must be VEC3");
+  auto normal = primitive.attributes.find("NORMAL");
+  if (normal != primitive.attributes.end()) {
+    SEGMORPH_RETURN_IF_ERROR(read_floats(model, normal->second, what + " NORMAL", out.rest_normals, &components));
+    if (components != 3 || out.rest_normals.size() != out.rest_positions.size())
+      return Status(StatusCode::bad_data, what + ": NORMAL must be VEC3 with one element per vertex");
+  }
+  auto tangent = primitive.attributes.find("TANGENT");
+  if (tangent != primitive.attributes.end()) {
+    SEGMORPH_RETURN_IF_ERROR(read_floats(model, tangent->second, what + " TANGENT", out.rest_tangents, &components));
+    if (components != 4 || out.rest_tangents.size() != out.rest_positions.size() / 3 * 4)
+      return Status(StatusCode::bad_data, what + ": TANGENT must be VEC4 with one element per vertex");
+  }
+  return Status::Ok();
+}
+
 Status sample_node(const tinygltf::Model& model, const Scene& scene, const AnimatedNode& node,
-                   const SampleSettings& settings, SampledNode& out, const std::vector<std::vector<float>>* clip_times) {
+                   const SampleSettings& settings, SampledNode& out,
+                   const std::vector<std::vector<float>>* clip_times) {
   assert(!clip_times || clip_times->size() == node.clips.size());
   out = SampledNode();
   out.node = &node;
@@ -255,8 +285,8 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
                                            "skin " + std::to_string(node.skin) + " inverseBindMatrices", matrices,
                                            &components));
       if (components != 16 || matrices.size() < skin.joints.size() * 16)
-        return Status(StatusCode::bad_data, "skin " + std::to_string(node.skin) +
-                                                ": inverseBindMatrices must be MAT4, one per joint");
+        return Status(StatusCode::bad_data,
+                      "skin " + std::to_string(node.skin) + ": inverseBindMatrices must be MAT4, one per joint");
       for (size_t j = 0; j < skin.joints.size(); ++j)
         for (int i = 0; i < 16; ++i) inverse_bind[j](i % 4, i / 4) = matrices[j * 16 + size_t(i)];
     }
@@ -271,26 +301,10 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
     SampledPrimitive& sampled = out.primitives[p];
     sampled.primitive = int(p);
 
-    auto position = primitive.attributes.find("POSITION");
-    if (position == primitive.attributes.end()) return Status(StatusCode::bad_data, what + " has no POSITION");
-    int components = 0;
-    SEGMORPH_RETURN_IF_ERROR(read_floats(model, position->second, what + " POSITION", input.positions, &components));
-    if (components != 3) return Status(StatusCode::bad_data, what + ": POSITION must be VEC3");
+    SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, sampled));
+    input.positions = sampled.rest_positions;
     input.vertex_count = input.positions.size() / 3;
-    sampled.rest_positions = input.positions;
-
-    auto normal = primitive.attributes.find("NORMAL");
-    if (normal != primitive.attributes.end()) {
-      SEGMORPH_RETURN_IF_ERROR(read_floats(model, normal->second, what + " NORMAL", sampled.rest_normals, &components));
-      if (components != 3 || sampled.rest_normals.size() != input.positions.size())
-        return Status(StatusCode::bad_data, what + ": NORMAL must be VEC3 with one element per vertex");
-    }
-    auto tangent = primitive.attributes.find("TANGENT");
-    if (tangent != primitive.attributes.end()) {
-      SEGMORPH_RETURN_IF_ERROR(read_floats(model, tangent->second, what + " TANGENT", sampled.rest_tangents, &components));
-      if (components != 4 || sampled.rest_tangents.size() != input.vertex_count * 4)
-        return Status(StatusCode::bad_data, what + ": TANGENT must be VEC4 with one element per vertex");
-    }
+    int components = 0;
 
     input.deltas.resize(target_count);
     for (size_t t = 0; t < target_count; ++t) {
@@ -299,8 +313,8 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
       SEGMORPH_RETURN_IF_ERROR(read_floats(model, delta->second, what + " target " + std::to_string(t) + " POSITION",
                                            input.deltas[t], &components));
       if (components != 3 || input.deltas[t].size() != input.positions.size())
-        return Status(StatusCode::bad_data, what + " target " + std::to_string(t) +
-                                                ": POSITION must be VEC3 with one element per vertex");
+        return Status(StatusCode::bad_data,
+                      what + " target " + std::to_string(t) + ": POSITION must be VEC3 with one element per vertex");
     }
     if (joints) SEGMORPH_RETURN_IF_ERROR(read_skin_influences(model, primitive, joints->size(), what, input));
 
@@ -317,7 +331,8 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
   std::vector<double> weights(target_count), morphed;
   for (size_t c = 0; c < node.clips.size(); ++c) {
     const Clip& clip = scene.clips[size_t(node.clips[c])];
-    const std::vector<float> times = clip_times ? (*clip_times)[c] : frame_times(scene, model, node, node.clips[c], settings);
+    const std::vector<float> times =
+        clip_times ? (*clip_times)[c] : frame_times(scene, model, node, node.clips[c], settings);
     const Track* weight_track = nullptr;
     bool step = true;
     for_each_moving_track(model, scene.graph, node, clip, [&](const Track& track) {
@@ -327,8 +342,9 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
     out.clip_is_step.push_back(step);
     if (weight_track && size_t(weight_track->curve.width) != target_count)
       return Status(StatusCode::bad_data, "animation " + std::to_string(clip.animation) + ": weights of " + label +
-                                              " have " + std::to_string(weight_track->curve.width) + " values per key, the mesh " +
-                                              std::to_string(target_count) + " morph targets");
+                                              " have " + std::to_string(weight_track->curve.width) +
+                                              " values per key, the mesh " + std::to_string(target_count) +
+                                              " morph targets");
 
     for (SampledPrimitive& sampled : out.primitives) {
       FrameSequence& sequence = sampled.clips[c];
@@ -338,8 +354,10 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
     }
 
     for (size_t f = 0; f < times.size(); ++f) {
-      if (weight_track) weight_track->curve.evaluate(times[f], false, weights.data());
-      else weights = static_weights;
+      if (weight_track)
+        weight_track->curve.evaluate(times[f], false, weights.data());
+      else
+        weights = static_weights;
       if (joints) {
         evaluate_global_transforms(model, scene.graph, &clip, times[f], global);
         joint_matrices.resize(joints->size());

@@ -1,11 +1,11 @@
 // Finding the animated primitives of a glTF scene and sampling them into frame sequences.
 #pragma once
 
+#include <tiny_gltf.h>
+
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <tiny_gltf.h>
 
 #include "animation.h"
 #include "frame_sequence.h"
@@ -17,11 +17,11 @@ namespace segmorph {
 struct AnimatedNode {
   int node = -1;
   int mesh = -1;
-  int skin = -1;              // -1 when not skinned
-  bool morphed = false;       // the mesh has morph targets (animated or not, they are applied)
+  int skin = -1;         // -1 when not skinned
+  bool morphed = false;  // the mesh has morph targets (animated or not, they are applied)
   bool weights_animated = false;
   bool skin_animated = false;
-  std::vector<int> clips;     // indices into Scene::clips of the clips that move it
+  std::vector<int> clips;  // indices into Scene::clips of the clips that move it
 
   // "morph", "skinned" or "morph+skinned".
   std::string kind() const;
@@ -56,15 +56,20 @@ struct SampledPrimitive {
   std::vector<FrameSequence> clips;   // one per AnimatedNode::clips entry, same order
 };
 
+// Reads `primitive`'s POSITION (VEC3), NORMAL (VEC3) and TANGENT (VEC4) into out's rest_* fields, checking that
+// normals and tangents have one element per vertex (baking reads them so). `what` names the primitive in errors.
+Status read_rest_attributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive, const std::string& what,
+                            SampledPrimitive& out);
+
 struct SampledNode {
   const AnimatedNode* node = nullptr;
-  std::vector<bool> clip_is_step;     // per clip: every track that moves the node uses STEP
+  std::vector<bool> clip_is_step;  // per clip: every track that moves the node uses STEP
   std::vector<SampledPrimitive> primitives;
 };
 
 // Frame times of `node` in clip `clip` (an index into scene.clips).
-std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model, const AnimatedNode& node,
-                               int clip, const SampleSettings& settings);
+std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model, const AnimatedNode& node, int clip,
+                               const SampleSettings& settings);
 
 // Samples every primitive of `node` over its clips. Positions are in the node's mesh space for morph-only
 // nodes and in model (world) space for skinned ones, as glTF renders them. `clip_times`, when given, holds

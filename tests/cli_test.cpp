@@ -57,6 +57,13 @@ std::string output_directory(const std::string& name) {
 
 // Runs bake (or `command`) with a bad input and checks the promise: exit 1, one line naming the file, no output,
 // no leftovers.
+// SimpleMorph's two .bin files copied into `directory`, and its JSON to edit and write beside them.
+std::string simple_morph_in(const std::string& directory) {
+  fs::copy_file(sample("SimpleMorph/simpleMorphGeometry.bin"), directory + "/simpleMorphGeometry.bin");
+  fs::copy_file(sample("SimpleMorph/simpleMorphAnimation.bin"), directory + "/simpleMorphAnimation.bin");
+  return read_text(sample("SimpleMorph/SimpleMorph.gltf"));
+}
+
 void expect_clean_failure(const std::string& input, const std::string& expected_message,
                           const std::string& command = "bake") {
   SCOPED_TRACE(input);
@@ -132,9 +139,7 @@ TEST(Cli, BadInputsFailCleanly) {
   expect_clean_failure(directory + "/meshopt.gltf", "EXT_meshopt_compression");
 
   // SimpleMorph with its first accessor claiming more vertices than its bufferView holds.
-  std::string morph = read_text(sample("SimpleMorph/SimpleMorph.gltf"));
-  fs::copy_file(sample("SimpleMorph/simpleMorphGeometry.bin"), directory + "/simpleMorphGeometry.bin");
-  fs::copy_file(sample("SimpleMorph/simpleMorphAnimation.bin"), directory + "/simpleMorphAnimation.bin");
+  std::string morph = simple_morph_in(directory);
   const size_t count = morph.find("\"count\"");
   ASSERT_NE(count, std::string::npos);
   morph.replace(count, morph.find_first_of(",}", count) - count, "\"count\" : 3000000");
@@ -146,11 +151,10 @@ TEST(Cli, BadInputsFailCleanly) {
 // keeps the attribute without reading it, and repack copied the view unchecked (found by tests/fuzz).
 TEST(Cli, UnreadBufferViewOutsideItsBufferFailsCleanly) {
   const std::string directory = output_directory("views");
-  fs::copy_file(sample("SimpleMorph/simpleMorphGeometry.bin"), directory + "/simpleMorphGeometry.bin");
-  fs::copy_file(sample("SimpleMorph/simpleMorphAnimation.bin"), directory + "/simpleMorphAnimation.bin");
+  const std::string original = simple_morph_in(directory);
   for (const std::string view :
        {R"({"buffer":7,"byteLength":24})", R"({"buffer":1,"byteOffset":48,"byteLength":24})"}) {
-    std::string morph = read_text(sample("SimpleMorph/SimpleMorph.gltf"));
+    std::string morph = original;
     const std::string position = "\"POSITION\":1";
     morph.insert(morph.find(position) + position.size(), ",\"TEXCOORD_0\":6");
     // New last entries of "accessors" (followed by "asset") and "bufferViews" (followed by "accessors").
@@ -167,9 +171,7 @@ TEST(Cli, UnreadBufferViewOutsideItsBufferFailsCleanly) {
 // bakes without analyze_scene).
 TEST(Cli, BadNodeReferencesFailCleanly) {
   const std::string directory = output_directory("references");
-  fs::copy_file(sample("SimpleMorph/simpleMorphGeometry.bin"), directory + "/simpleMorphGeometry.bin");
-  fs::copy_file(sample("SimpleMorph/simpleMorphAnimation.bin"), directory + "/simpleMorphAnimation.bin");
-  std::string morph = read_text(sample("SimpleMorph/SimpleMorph.gltf"));
+  std::string morph = simple_morph_in(directory);
   morph.insert(morph.find('}', morph.find("\"mesh\":0")) + 1, R"(,{"skin":99})");  // a second node
   write_text(directory + "/skin.gltf", morph);
   expect_clean_failure(directory + "/skin.gltf", "skin that does not exist");
