@@ -31,7 +31,7 @@ const char* const kUsage =
     "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
     "         [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
-    "      as a SEGMORPH_animation_compression stream. Default target: --error 0.15 (KG error in %%).\n"
+    "      as a SEGMORPH_animation_compression stream. Default target: --error 0.15 (KG error in %).\n"
     "  decode IN -o OUT\n"
     "      Restore standard glTF morph targets (the form bake writes) from an encoded file.\n"
     "  verify ORIGINAL COMPRESSED [--json]\n"
