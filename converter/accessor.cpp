@@ -272,6 +272,24 @@ int AccessorWriter::add_floats(const float* data, size_t count, int type, bool b
   return int(model_.accessors.size()) - 1;
 }
 
+int AccessorWriter::add_normalized_shorts(const float* data, size_t count, int type, bool is_signed) {
+  const size_t values = count * size_t(components_of_type(type));
+  const double scale = is_signed ? 32767.0 : 65535.0, low = is_signed ? -1.0 : 0.0;
+  std::vector<uint16_t> shorts(values);
+  for (size_t i = 0; i < values; ++i) {
+    const long q = std::lround(std::clamp(double(data[i]), low, 1.0) * scale);
+    shorts[i] = is_signed ? uint16_t(int16_t(q)) : uint16_t(q);
+  }
+  tinygltf::Accessor accessor;
+  accessor.componentType = is_signed ? TINYGLTF_COMPONENT_TYPE_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+  accessor.normalized = true;
+  accessor.count = count;
+  accessor.type = type;
+  accessor.bufferView = add_view(shorts.data(), values * sizeof(uint16_t), 0);
+  model_.accessors.push_back(accessor);
+  return int(model_.accessors.size()) - 1;
+}
+
 int AccessorWriter::add_indices(const std::vector<uint32_t>& indices) {
   tinygltf::Accessor accessor;
   accessor.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;

@@ -46,6 +46,9 @@ class AccessorWriter {
   // A float accessor that is zero except for `indices` (strictly increasing element indices) whose
   // elements are `values` (indices.size() × components floats): a sparse accessor with no bufferView.
   int add_sparse_floats(size_t count, int type, const std::vector<uint32_t>& indices, const std::vector<float>& values);
+  // count × components values in [0, 1] (unsigned) or [−1, 1] (signed) as normalized 16-bit integers, rounded to
+  // the nearest, as glTF allows for morph weights and rotations. Values outside the range are clamped.
+  int add_normalized_shorts(const float* data, size_t count, int type, bool is_signed);
   // An unsigned-int index accessor (TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER).
   int add_indices(const std::vector<uint32_t>& indices);
   // A bufferView holding `bytes` (for data an extension refers to).

@@ -6,6 +6,8 @@
 #include "accessor.h"
 #include "bake.h"
 #include "metrics.h"
+#include "normals.h"
+#include "topology.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {
@@ -27,6 +29,12 @@ int type_of_components(int components) {
 // The codec's error target relative to the user's (see compress_model).
 constexpr double kErrorTargetMargin = 0.99;
 
+// Kept morph targets (compress_targets): at most kTargetRounds encodes, stopping once the animation's KG is within
+// kTargetsCloseEnough of the goal; the targets' error target moves by at most kTargetsMaxRatio per round and stays
+// below kTargetsMaxError (%), which is reached when the weights hardly use the targets.
+constexpr int kTargetRounds = 8;
+constexpr double kTargetsCloseEnough = 0.93, kTargetsMaxRatio = 3, kTargetsMaxError = 20;
+
 // Draco position bits when none are given: the base mesh's quantization step (its largest extent over 2^bits)
 // about kBaseStepRatio times the residual step the error target implies, and at least kMinPositionBits. The
 // animation's closed loop corrects the base mesh's error in every frame, so the base need not be much finer
@@ -45,6 +53,307 @@ int automatic_position_bits(const std::vector<float>& positions, const std::vect
   if (!(extent > 0) || !(step > 0)) return kDefaultPositionBits;
   const double bits = std::round(std::log2(extent / step + 1));
   return int(std::clamp(bits, double(kMinPositionBits), double(kMaxPositionBits)));
+}
+
+// One primitive on its way out: its base mesh through Draco, its frames through the codec.
+struct PrimitiveEncoding {
+  DracoSettings draco;
+  std::vector<uint8_t> draco_bytes, stream;
+  DracoPrimitive draco_primitive;
+  BaseMesh decoded;              // the base mesh as a loader gets it back from Draco
+  std::vector<uint32_t> source;  // per decoded vertex, the original vertex it came from
+  EncodeReport report;
+  std::vector<FrameSequence> reconstruction;  // what the stream decodes to, in the decoded vertex order
+};
+
+// Reads every attribute of `primitive` (POSITION first) and its triangles into a base mesh.
+Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                      const std::vector<uint32_t>& triangles, size_t vertex_count, const std::string& what,
+                      BaseMesh& base) {
+  base = BaseMesh();
+  base.vertex_count = vertex_count;
+  base.triangles = triangles;
+  for (const auto& [semantic, accessor] : primitive.attributes) {
+    BaseMeshAttribute attribute;
+    attribute.semantic = semantic;
+    SEGMORPH_RETURN_IF_ERROR(
+        read_floats(model, accessor, what + " " + semantic, attribute.values, &attribute.components));
+    if (semantic == "POSITION")
+      base.attributes.insert(base.attributes.begin(), std::move(attribute));
+    else
+      base.attributes.push_back(std::move(attribute));
+  }
+  return Status::Ok();
+}
+
+// Compresses the base mesh and finds where Draco put each vertex.
+Status encode_base(const BaseMesh& base, PrimitiveEncoding& out) {
+  SEGMORPH_RETURN_IF_ERROR(encode_draco_base_mesh(base, out.draco, out.draco_bytes, out.draco_primitive.attributes));
+  SEGMORPH_RETURN_IF_ERROR(decode_draco_base_mesh(out.draco_bytes.data(), out.draco_bytes.size(),
+                                                  out.draco_primitive.attributes, out.decoded));
+  // Draco's edgebreaker reorders vertices and may merge duplicates; each decoded vertex follows the original it
+  // came from.
+  return match_decoded_vertices(base, out.decoded, out.draco, out.source);
+}
+
+// `clips` with their vertices in the order the decoder gets back from Draco.
+std::vector<FrameSequence> in_decoded_order(const std::vector<FrameSequence>& clips, const PrimitiveEncoding& encoding) {
+  const BaseMesh& decoded = encoding.decoded;
+  std::vector<FrameSequence> reordered(clips.size());
+  for (size_t c = 0; c < clips.size(); ++c) {
+    const FrameSequence& clip = clips[c];
+    FrameSequence& out = reordered[c];
+    out.vertex_count = decoded.vertex_count;
+    out.frame_count = clip.frame_count;
+    out.times = clip.times;
+    out.triangles = decoded.triangles;
+    out.positions.resize(clip.frame_count * decoded.vertex_count * 3);
+    for (size_t f = 0; f < clip.frame_count; ++f)
+      for (size_t v = 0; v < decoded.vertex_count; ++v)
+        for (int k = 0; k < 3; ++k)
+          out.positions[(f * decoded.vertex_count + v) * 3 + size_t(k)] =
+              clip.frame(f)[size_t(encoding.source[v]) * 3 + size_t(k)];
+  }
+  return reordered;
+}
+
+// Encodes `reordered` against the decoded base positions, then decodes the stream as a reader will (a few tens of
+// milliseconds) and refuses a stream that does not give back the encoder's own reconstruction.
+Status encode_stream(const std::vector<FrameSequence>& reordered, const CodecSettings& settings,
+                     const std::string& what, PrimitiveEncoding& encoding) {
+  const BaseMesh& decoded = encoding.decoded;
+  encoding.report = EncodeReport();
+  SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, settings, encoding.stream,
+                                            &encoding.report, &encoding.reconstruction));
+  std::vector<FrameSequence> check;
+  const Status check_status = decode_animation(encoding.stream.data(), encoding.stream.size(),
+                                               decoded.attributes[0].values, decoded.triangles, check);
+  bool same = check_status.ok() && check.size() == encoding.reconstruction.size();
+  for (size_t c = 0; same && c < check.size(); ++c) same = check[c].positions == encoding.reconstruction[c].positions;
+  if (!same)
+    return Status(StatusCode::internal, what + ": the animation stream does not decode to the encoder's frames (" +
+                                            (check_status.ok() ? "different frames" : check_status.message()) +
+                                            "); this is a segmorph bug, please report it");
+  return Status::Ok();
+}
+
+// The written primitive: attribute accessors without data (Draco holds it), the two extensions.
+tinygltf::Primitive encoded_primitive(const tinygltf::Primitive& original, const PrimitiveEncoding& encoding,
+                                      CompressedPrimitive compressed, AccessorWriter& writer,
+                                      tinygltf::Model& model) {
+  const BaseMesh& decoded = encoding.decoded;
+  tinygltf::Primitive out;
+  out.material = original.material;
+  out.mode = TINYGLTF_MODE_TRIANGLES;
+  out.extras = original.extras;
+  out.extensions = original.extensions;
+  for (const BaseMeshAttribute& attribute : decoded.attributes) {
+    const int type = type_of_components(attribute.components);
+    // The data is Draco's; POSITION keeps its bounds, as glTF requires.
+    out.attributes[attribute.semantic] =
+        attribute.semantic == "POSITION" ? writer.add_described(attribute.values.data(), decoded.vertex_count, type)
+                                         : writer.add_zeros(decoded.vertex_count, type, false);
+  }
+  // The indices accessor describes Draco's triangles and has no bufferView, as KHR_draco_mesh_compression
+  // asks (validators warn about a TRIANGLES primitive whose vertex count is not a multiple of 3 without
+  // one). tinygltf 2.7 refuses such accessors; load_gltf drops them before it parses (json_prepass.h).
+  tinygltf::Accessor indices;
+  indices.componentType =
+      decoded.vertex_count <= 65535 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+  indices.count = decoded.triangles.size();
+  indices.type = TINYGLTF_TYPE_SCALAR;
+  model.accessors.push_back(indices);
+  out.indices = int(model.accessors.size()) - 1;
+  DracoPrimitive draco = encoding.draco_primitive;
+  draco.buffer_view = writer.add_view(encoding.draco_bytes.data(), encoding.draco_bytes.size(), 0);
+  out.extensions[kDracoExtensionName] = draco_primitive_value(draco);
+  compressed.buffer_view = writer.add_view(encoding.stream.data(), encoding.stream.size(), 0);
+  out.extensions[kExtensionName] = compressed_primitive_value(compressed);
+  return out;
+}
+
+// The positions glTF renders for morph target displacements `deltas` (T × V × 3) over `base` at `weights`
+// (T per frame), as sample_node computes them.
+void morph(const std::vector<float>& base, const std::vector<std::vector<float>>& deltas, const double* weights,
+           float* out) {
+  std::vector<double> sum(base.begin(), base.end());
+  for (size_t t = 0; t < deltas.size(); ++t) {
+    if (weights[t] == 0 || deltas[t].empty()) continue;
+    for (size_t i = 0; i < sum.size(); ++i) sum[i] += weights[t] * deltas[t][i];
+  }
+  for (size_t i = 0; i < sum.size(); ++i) out[i] = float(sum[i]);
+}
+
+// Morph target displacements from decoded target frames: frame − base, as the decoder writes them.
+std::vector<std::vector<float>> target_displacements(const FrameSequence& frames, const std::vector<float>& base) {
+  std::vector<std::vector<float>> deltas(frames.frame_count, std::vector<float>(base.size()));
+  for (size_t t = 0; t < frames.frame_count; ++t)
+    for (size_t i = 0; i < base.size(); ++i) deltas[t][i] = frames.frame(t)[i] - base[i];
+  return deltas;
+}
+
+// The KG error (%) of the animation a primitive plays with its decoded targets, against `reordered`, the sampled
+// original frames in the decoded vertex order.
+double targets_kg_percent(const std::vector<FrameSequence>& reordered, const SampledNode& node,
+                          const PrimitiveEncoding& encoding) {
+  const std::vector<float>& base = encoding.decoded.attributes[0].values;
+  const std::vector<std::vector<float>> deltas = target_displacements(encoding.reconstruction[0], base);
+  ErrorAccumulator error;
+  for (size_t c = 0; c < reordered.size(); ++c) {
+    FrameSequence played = reordered[c];
+    for (size_t f = 0; f < played.frame_count; ++f)
+      morph(base, deltas, node.clip_weights[c].data() + f * deltas.size(), played.frame(f));
+    error.add(reordered[c], played);
+  }
+  return error.result().kg_percent;
+}
+
+Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, const CodecSettings& settings,
+                             const DracoSettings& draco, AccessorWriter& writer, CompressReport& report,
+                             const std::function<void(const std::string&)>& progress) {
+  const AnimatedNode& animated = *node.node;
+  tinygltf::Mesh& mesh = model.meshes[size_t(animated.mesh)];
+  size_t frame_total = 0;
+  for (const FrameSequence& clip : node.primitives[0].clips) frame_total += clip.frame_count;
+  for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+    tinygltf::Primitive& primitive = mesh.primitives[p];
+    const SampledPrimitive& sampled = node.primitives[p];
+    const std::string what = "mesh " + std::to_string(animated.mesh) + " primitive " + std::to_string(p);
+    const FrameSequence& first = sampled.clips[0];
+    if (first.triangles.empty())
+      return Status(StatusCode::unsupported, what + ": only triangle primitives can be encoded");
+    const size_t target_count = sampled.target_deltas.size(), values = first.vertex_count * 3;
+    progress("encoding " + what + " (" + std::to_string(first.vertex_count) + " vertices, " +
+             std::to_string(target_count) + " morph targets)");
+
+    // The stream's one clip: frame t is the rest positions displaced by target t at weight 1.
+    FrameSequence targets;
+    targets.vertex_count = first.vertex_count;
+    targets.frame_count = target_count;
+    targets.triangles = first.triangles;
+    targets.positions.resize(target_count * values);
+    for (size_t t = 0; t < target_count; ++t) {
+      targets.times.push_back(float(t));
+      for (size_t i = 0; i < values; ++i)
+        targets.positions[t * values + i] =
+            sampled.rest_positions[i] + (sampled.target_deltas[t].empty() ? 0.0f : sampled.target_deltas[t][i]);
+    }
+
+    PrimitiveEncoding encoding;
+    encoding.draco = draco;
+    BaseMesh base;
+    SEGMORPH_RETURN_IF_ERROR(read_base_mesh(model, primitive, first.triangles, first.vertex_count, what, base));
+    if (encoding.draco.position_bits == 0)
+      encoding.draco.position_bits = automatic_position_bits(base.attributes[0].values, {targets}, settings);
+    SEGMORPH_RETURN_IF_ERROR(encode_base(base, encoding));
+    const std::vector<FrameSequence> reordered_targets = in_decoded_order({targets}, encoding);
+    const std::vector<FrameSequence> reordered = in_decoded_order(sampled.clips, encoding);
+
+    CodecSettings target_settings = settings;
+    target_settings.outside_bytes += encoding.draco_bytes.size();
+    if (settings.mode == RateMode::bpvf) {
+      // The rate is of the whole animation: its frames, not the targets, are what a vertex-frame counts.
+      target_settings.target = settings.target * double(frame_total) / double(target_count);
+      SEGMORPH_RETURN_IF_ERROR(encode_stream(reordered_targets, target_settings, what, encoding));
+    } else {
+      // The error is of the animation the weights play, which mixes the targets' errors: the targets' error
+      // target follows, by the ratio measured, until the animation's KG is within the (margined) target and not
+      // far below it. A few encodes of T frames each.
+      const double goal = settings.target * kErrorTargetMargin;
+      double target = goal;
+      PrimitiveEncoding best;
+      bool found = false;
+      for (int round = 0; round < kTargetRounds; ++round) {
+        target_settings.target = target;
+        SEGMORPH_RETURN_IF_ERROR(encode_stream(reordered_targets, target_settings, what, encoding));
+        const double kg = targets_kg_percent(reordered, node, encoding);
+        if (kg <= goal && (!found || encoding.stream.size() < best.stream.size())) {
+          best = encoding;
+          found = true;
+        }
+        if (found && kg >= kTargetsCloseEnough * goal) break;
+        const double ratio = kg > 0 ? goal / kg : kTargetsMaxRatio;
+        target = std::min(target * std::clamp(ratio * (kg > goal ? 0.97 : 1.0), 1 / kTargetsMaxRatio, kTargetsMaxRatio),
+                          kTargetsMaxError);
+        if (found && target <= target_settings.target) break;  // no coarser setting left to try
+      }
+      if (!found)
+        return Status(StatusCode::internal, what + ": the morph targets did not reach the error target");
+      encoding = std::move(best);
+    }
+    report.primitives.push_back(encoding.report);
+    report.draco_bytes += encoding.draco_bytes.size();
+    report.animation_bytes += encoding.stream.size();
+
+    // The targets stay, as accessors of zeros the stream fills in: POSITION, and NORMAL when the primitive has
+    // normals and its targets moved them (the decoder derives them as bake does). Other target attributes go.
+    const bool normals = primitive.attributes.count("NORMAL") &&
+                         std::any_of(primitive.targets.begin(), primitive.targets.end(),
+                                     [](const std::map<std::string, int>& t) { return t.count("NORMAL") > 0; });
+    CompressedPrimitive compressed;
+    compressed.morph_targets = true;
+    tinygltf::Primitive out = encoded_primitive(primitive, encoding, compressed, writer, model);
+    for (size_t t = 0; t < target_count; ++t) {
+      std::map<std::string, int> target;
+      target["POSITION"] = writer.add_zeros(encoding.decoded.vertex_count, TINYGLTF_TYPE_VEC3, true);
+      if (normals) target["NORMAL"] = writer.add_zeros(encoding.decoded.vertex_count, TINYGLTF_TYPE_VEC3, false);
+      out.targets.push_back(std::move(target));
+    }
+    primitive = std::move(out);
+  }
+  return Status::Ok();
+}
+
+// Decodes the stream of a primitive that keeps its morph targets and fills the targets in: POSITION with the
+// decoded displacements, NORMAL (where the target has it) derived as bake derives frame normals.
+Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
+                       const std::string& what) {
+  SampledPrimitive rest;
+  SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, rest));
+  std::vector<uint32_t> triangles;
+  if (primitive.indices < 0) return Status(StatusCode::bad_data, what + ": a compressed primitive needs indices");
+  SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", triangles));
+  const size_t vertex_count = rest.rest_positions.size() / 3;
+  for (uint32_t index : triangles)
+    if (index >= vertex_count) return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
+  const unsigned char* data = nullptr;
+  size_t size = 0;
+  SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, compressed.buffer_view, what + " " + kExtensionName, &data, &size));
+  std::vector<FrameSequence> clips;
+  const Status status = decode_animation(data, size, rest.rest_positions, triangles, clips);
+  if (!status.ok()) return Status(status.code(), what + ": " + status.message());
+  if (clips.size() != 1 || clips[0].frame_count != primitive.targets.size())
+    return Status(StatusCode::bad_data, what + ": the stream's frames disagree with the morph target count");
+  clips[0].triangles = triangles;
+  for (const std::map<std::string, int>& target : primitive.targets)
+    for (const auto& [semantic, accessor] : target)
+      if (semantic != "POSITION" && semantic != "NORMAL")
+        return Status(StatusCode::bad_data, what + ": a kept morph target has " + semantic +
+                                                ", which the stream does not restore");
+
+  AccessorWriter writer(model);
+  const std::vector<std::vector<float>> deltas = target_displacements(clips[0], rest.rest_positions);
+  const bool normals = !rest.rest_normals.empty();
+  WeldedTopology topology;
+  std::vector<double> base_geometric;
+  std::vector<float> frame_normals(vertex_count * 3), normal_delta(vertex_count * 3);
+  if (normals) {
+    topology = weld_topology(clips);
+    base_geometric = welded_vertex_normals(rest.rest_positions.data(), topology);
+  }
+  for (size_t t = 0; t < deltas.size(); ++t) {
+    std::map<std::string, int>& target = primitive.targets[t];
+    if (!target.count("POSITION"))
+      return Status(StatusCode::bad_data, what + ": a kept morph target has no POSITION");
+    target["POSITION"] = writer.add_floats(deltas[t].data(), vertex_count, TINYGLTF_TYPE_VEC3, true, 0);
+    if (!target.count("NORMAL")) continue;
+    if (!normals) return Status(StatusCode::bad_data, what + ": a morph target has NORMAL, the primitive has none");
+    deform_normals(base_geometric, rest.rest_normals.data(), clips[0].frame(t), topology, frame_normals.data());
+    for (size_t i = 0; i < normal_delta.size(); ++i) normal_delta[i] = frame_normals[i] - rest.rest_normals[i];
+    target["NORMAL"] = writer.add_floats(normal_delta.data(), vertex_count, TINYGLTF_TYPE_VEC3, false, 0);
+  }
+  primitive.extensions.erase(kExtensionName);
+  return Status::Ok();
 }
 
 }  // namespace
@@ -109,108 +418,74 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       progress("encoding " + what + " (" + std::to_string(frames.clips[0].vertex_count) + " vertices)");
 
       // The base mesh: every attribute of the baked primitive (its first frame), and the triangles.
+      PrimitiveEncoding encoding;
+      encoding.draco = draco;
       BaseMesh base;
-      base.vertex_count = frames.clips[0].vertex_count;
-      base.triangles = frames.clips[0].triangles;
-      for (const auto& [semantic, accessor] : primitive.attributes) {
-        BaseMeshAttribute attribute;
-        attribute.semantic = semantic;
-        SEGMORPH_RETURN_IF_ERROR(
-            read_floats(model, accessor, what + " " + semantic, attribute.values, &attribute.components));
-        if (semantic == "POSITION")
-          base.attributes.insert(base.attributes.begin(), std::move(attribute));
-        else
-          base.attributes.push_back(std::move(attribute));
-      }
-      DracoSettings primitive_draco = draco;
-      if (primitive_draco.position_bits == 0)
-        primitive_draco.position_bits = automatic_position_bits(base.attributes[0].values, frames.clips, settings);
-      DracoPrimitive draco_primitive;
-      std::vector<uint8_t> draco_bytes;
-      SEGMORPH_RETURN_IF_ERROR(encode_draco_base_mesh(base, primitive_draco, draco_bytes, draco_primitive.attributes));
-      BaseMesh decoded;
       SEGMORPH_RETURN_IF_ERROR(
-          decode_draco_base_mesh(draco_bytes.data(), draco_bytes.size(), draco_primitive.attributes, decoded));
-      // The frames in the order of the vertices the decoder gets back (Draco's edgebreaker reorders them, and may
-      // merge duplicates; each decoded vertex follows the original it came from).
-      std::vector<uint32_t> source;
-      SEGMORPH_RETURN_IF_ERROR(match_decoded_vertices(base, decoded, primitive_draco, source));
-      std::vector<FrameSequence> reordered(frames.clips.size());
-      for (size_t c = 0; c < frames.clips.size(); ++c) {
-        const FrameSequence& clip = frames.clips[c];
-        FrameSequence& out = reordered[c];
-        out.vertex_count = decoded.vertex_count;
-        out.frame_count = clip.frame_count;
-        out.times = clip.times;
-        out.triangles = decoded.triangles;
-        out.positions.resize(clip.frame_count * decoded.vertex_count * 3);
-        for (size_t f = 0; f < clip.frame_count; ++f)
-          for (size_t v = 0; v < decoded.vertex_count; ++v)
-            for (int k = 0; k < 3; ++k)
-              out.positions[(f * decoded.vertex_count + v) * 3 + size_t(k)] =
-                  clip.frame(f)[size_t(source[v]) * 3 + size_t(k)];
-      }
+          read_base_mesh(model, primitive, frames.clips[0].triangles, frames.clips[0].vertex_count, what, base));
+      if (encoding.draco.position_bits == 0)
+        encoding.draco.position_bits = automatic_position_bits(base.attributes[0].values, frames.clips, settings);
+      SEGMORPH_RETURN_IF_ERROR(encode_base(base, encoding));
 
       // The animation, against the base positions the decoder will have.
       CodecSettings primitive_settings = settings;
-      primitive_settings.outside_bytes += draco_bytes.size();
+      primitive_settings.outside_bytes += encoding.draco_bytes.size();
       // The codec meets its error target on the frames it is given, in Draco's vertex order; verify measures
       // the decoded file against the original, where vertices Draco merged count once each and the morph-target
       // form adds its rounding (measured: up to 0.3 % above on the samples). Aim a little lower.
       if (settings.mode == RateMode::error) primitive_settings.target *= kErrorTargetMargin;
-      std::vector<uint8_t> stream;
-      EncodeReport encode_report;
-      std::vector<FrameSequence> reconstruction, check;
-      SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, primitive_settings, stream,
-                                                &encode_report, &reconstruction));
-      // Never write a stream a decoder would read differently: decode it as a reader will (a few tens of
-      // milliseconds) and compare with the encoder's own reconstruction.
-      const Status check_status =
-          decode_animation(stream.data(), stream.size(), decoded.attributes[0].values, decoded.triangles, check);
-      bool same = check_status.ok() && check.size() == reconstruction.size();
-      for (size_t c = 0; same && c < check.size(); ++c) same = check[c].positions == reconstruction[c].positions;
-      if (!same)
-        return Status(StatusCode::internal, what + ": the animation stream does not decode to the encoder's frames (" +
-                                                (check_status.ok() ? "different frames" : check_status.message()) +
-                                                "); this is a segmorph bug, please report it");
-      report.primitives.push_back(encode_report);
-      report.draco_bytes += draco_bytes.size();
-      report.animation_bytes += stream.size();
-
-      // The primitive: attribute accessors without data (Draco holds it), the two extensions.
-      tinygltf::Primitive out;
-      out.material = primitive.material;
-      out.mode = TINYGLTF_MODE_TRIANGLES;
-      out.extras = primitive.extras;
-      out.extensions = primitive.extensions;
-      for (const BaseMeshAttribute& attribute : decoded.attributes) {
-        const int type = type_of_components(attribute.components);
-        // The data is Draco's; POSITION keeps its bounds, as glTF requires.
-        out.attributes[attribute.semantic] =
-            attribute.semantic == "POSITION" ? writer.add_described(attribute.values.data(), decoded.vertex_count, type)
-                                             : writer.add_zeros(decoded.vertex_count, type, false);
-      }
-      // The indices accessor describes Draco's triangles and has no bufferView, as KHR_draco_mesh_compression
-      // asks (validators warn about a TRIANGLES primitive whose vertex count is not a multiple of 3 without
-      // one). tinygltf 2.7 refuses such accessors; load_gltf drops them before it parses (json_prepass.h).
-      tinygltf::Accessor indices;
-      indices.componentType =
-          decoded.vertex_count <= 65535 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
-      indices.count = decoded.triangles.size();
-      indices.type = TINYGLTF_TYPE_SCALAR;
-      model.accessors.push_back(indices);
-      out.indices = int(model.accessors.size()) - 1;
-      draco_primitive.buffer_view = writer.add_view(draco_bytes.data(), draco_bytes.size(), 0);
-      out.extensions[kDracoExtensionName] = draco_primitive_value(draco_primitive);
-      CompressedPrimitive with_stream = compressed;
-      with_stream.buffer_view = writer.add_view(stream.data(), stream.size(), 0);
-      out.extensions[kExtensionName] = compressed_primitive_value(with_stream);
-      primitive = std::move(out);
+      SEGMORPH_RETURN_IF_ERROR(encode_stream(in_decoded_order(frames.clips, encoding), primitive_settings, what, encoding));
+      report.primitives.push_back(encoding.report);
+      report.draco_bytes += encoding.draco_bytes.size();
+      report.animation_bytes += encoding.stream.size();
+      primitive = encoded_primitive(primitive, encoding, compressed, writer, model);
     }
     if (mesh.extras.IsObject() && mesh.extras.Has("targetNames")) {
       tinygltf::Value::Object extras = mesh.extras.Get<tinygltf::Value::Object>();
       extras.erase("targetNames");
       mesh.extras = extras.empty() ? tinygltf::Value() : tinygltf::Value(std::move(extras));
+    }
+  }
+  declare_extension(model, kDracoExtensionName, true);
+  declare_extension(model, kExtensionName, false);
+  return Status::Ok();
+}
+
+Status compress_targets(tinygltf::Model& model, const std::vector<SampledNode>& kept, const CodecSettings& settings,
+                        const DracoSettings& draco, CompressReport& report,
+                        const std::function<void(const std::string&)>& progress) {
+  if (settings.mode == RateMode::lossless)
+    return Status(StatusCode::invalid_argument, "morph targets are kept only by lossy encodes");
+  AccessorWriter writer(model);
+  for (const SampledNode& node : kept) {
+    const AnimatedNode& animated = *node.node;
+    if (!animated.morphed || animated.skin >= 0)
+      return Status(StatusCode::invalid_argument, "only the targets of unskinned morph meshes are kept");
+    SEGMORPH_RETURN_IF_ERROR(compress_targets_node(model, node, settings, draco, writer, report, progress));
+  }
+  if (kept.empty()) return Status::Ok();
+  // The weights animations stay; their outputs take the smallest exact-enough form glTF allows: none when all
+  // zero, normalized 16-bit integers when within [0, 1] or [−1, 1] (a weight off by at most 1/65535 of its
+  // range moves a vertex by that fraction of its displacement), floats otherwise.
+  std::vector<bool> weighted(model.nodes.size(), false);
+  for (const SampledNode& node : kept) weighted[size_t(node.node->node)] = true;
+  for (tinygltf::Animation& animation : model.animations) {
+    std::vector<bool> done(animation.samplers.size(), false);
+    for (const tinygltf::AnimationChannel& channel : animation.channels) {
+      if (channel.target_path != "weights" || channel.target_node < 0 ||
+          size_t(channel.target_node) >= weighted.size() || !weighted[size_t(channel.target_node)] ||
+          channel.sampler < 0 || size_t(channel.sampler) >= done.size() || done[size_t(channel.sampler)])
+        continue;
+      done[size_t(channel.sampler)] = true;
+      tinygltf::AnimationSampler& sampler = animation.samplers[size_t(channel.sampler)];
+      std::vector<float> values;
+      SEGMORPH_RETURN_IF_ERROR(read_floats(model, sampler.output, "weights output", values));
+      const float low = values.empty() ? 0 : *std::min_element(values.begin(), values.end());
+      const float high = values.empty() ? 0 : *std::max_element(values.begin(), values.end());
+      if (low == 0 && high == 0)
+        sampler.output = writer.add_zeros(values.size(), TINYGLTF_TYPE_SCALAR, false);
+      else if (low >= -1 && high <= 1)
+        sampler.output = writer.add_normalized_shorts(values.data(), values.size(), TINYGLTF_TYPE_SCALAR, low < 0);
     }
   }
   declare_extension(model, kDracoExtensionName, true);
@@ -282,6 +557,20 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
     const std::string what = "mesh " + std::to_string(m);
     if (primitives.size() != model.meshes[m].primitives.size())
       return Status(StatusCode::bad_data, what + ": some primitives are compressed and some are not");
+    const bool targets = primitives[0].morph_targets;
+    for (const CompressedPrimitive& other : primitives)
+      if (other.morph_targets != targets)
+        return Status(StatusCode::bad_data, what + ": some primitives keep morph targets and some play clips");
+    if (targets) {
+      for (size_t p = 0; p < primitives.size(); ++p) {
+        const Status status = restore_targets(model, model.meshes[m].primitives[p], primitives[p],
+                                              what + " primitive " + std::to_string(p));
+        if (!status.ok()) return status;
+        found.animation_bytes += model.bufferViews[size_t(primitives[p].buffer_view)].byteLength;
+        ++found.primitives;
+      }
+      continue;
+    }
     std::vector<int> users;
     for (size_t n = 0; n < model.nodes.size(); ++n)
       if (model.nodes[n].mesh == int(m)) users.push_back(int(n));

@@ -27,6 +27,13 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
                       const DracoSettings& draco, CompressReport& report,
                       const std::function<void(const std::string&)>& progress);
 
+// Compresses the morph-target meshes of `kept` (unskinned nodes, each the only user of its mesh; a lossy
+// `settings`) where they are: each primitive's base mesh with Draco, its targets as one stream, the weights
+// animation left as it is. The error target is that of the animation the weights play.
+Status compress_targets(tinygltf::Model& model, const std::vector<SampledNode>& kept, const CodecSettings& settings,
+                        const DracoSettings& draco, CompressReport& report,
+                        const std::function<void(const std::string&)>& progress);
+
 // Sizes of what decoding found.
 struct DecodedSizes {
   size_t animation_bytes = 0;  // SEGMORPH streams
@@ -34,7 +41,7 @@ struct DecodedSizes {
 };
 
 // Replaces KHR_draco_mesh_compression primitives by plain accessors, then decodes SEGMORPH_animation_compression
-// primitives into the form bake writes. A model with neither is left as it is.
+// primitives: those that keep morph targets get them back, the others take the form bake writes. A model with neither is left as it is.
 Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes = nullptr);
 
 }  // namespace segmorph

@@ -12,6 +12,7 @@
 #include <iterator>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "accessor.h"
 #include "json_prepass.h"
@@ -353,6 +354,14 @@ void repack(tinygltf::Model& model) {
   model.bufferViews = std::move(kept_views);
   model.buffers.clear();
   if (!packed.data.empty()) model.buffers.push_back(std::move(packed));
+}
+
+size_t glb_size(tinygltf::Model model) {
+  repack(model);
+  tinygltf::TinyGLTF writer;
+  writer.SetImageWriter(write_no_image, nullptr);
+  std::ostringstream stream;
+  return writer.WriteGltfSceneToStream(&model, stream, false, true) ? stream.str().size() : 0;
 }
 
 Status save_gltf(tinygltf::Model& model, const std::string& path) {

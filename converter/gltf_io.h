@@ -23,6 +23,9 @@ void repack(tinygltf::Model& model);
 // in .gltf. The files appear whole or not at all: they are written under temporary names and renamed.
 Status save_gltf(tinygltf::Model& model, const std::string& path);
 
+// The bytes save_gltf would write for `model` as a .glb (images that are files included as it embeds them).
+size_t glb_size(tinygltf::Model model);
+
 // True when `path` ends in .glb or .gltf (case-insensitive).
 bool has_gltf_extension(const std::string& path);
 

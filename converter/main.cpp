@@ -29,9 +29,10 @@ const char* const kUsage =
     "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
     "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
-    "         [--json]\n"
+    "         [--targets auto|keep|bake] [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
-    "      as a SEGMORPH_animation_compression stream. Default target: --error 0.15 (KG error in %).\n"
+    "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
+    "      (see --targets). Default target: --error 0.15 (KG error in %).\n"
     "  decode IN -o OUT\n"
     "      Restore standard glTF morph targets (the form bake writes) from an encoded file.\n"
     "  verify ORIGINAL COMPRESSED [--json]\n"
@@ -50,6 +51,10 @@ const char* const kUsage =
     "  --clusters K       encode: number of motion clusters (default: automatic)\n"
     "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 30 (default: from\n"
     "                     the error target, at least 12; 14 with --bpvf or --lossless)\n"
+    "  --targets MODE     encode: what a morph-target mesh (unskinned, one node) stores. keep: its targets,\n"
+    "                     compressed, played by its own weights animation; bake: its sampled frames, like a\n"
+    "                     skinned mesh. auto (default): keep when it has at most half as many targets as\n"
+    "                     frames, and never with --lossless (kept targets are lossy)\n"
     "  --json             info, encode, verify: print one JSON object instead of text\n"
     "  -q, --quiet        no progress messages on stderr\n"
     "  -h, --help         this help\n"
@@ -65,6 +70,7 @@ struct Options {
   CodecSettings codec;
   DracoSettings draco;  // position_bits 0: compress_model chooses them
   bool rate_given = false;
+  enum class Targets { automatic, keep, bake } targets = Targets::automatic;
   bool json = false;
   bool quiet = false;
 };
@@ -234,17 +240,65 @@ size_t file_bytes(const std::string& path, const tinygltf::Model& model) {
   return total;
 }
 
+// Whether encode keeps the morph targets of `node` (see --targets): an unskinned morph mesh that only this node
+// uses, in a lossy encode, with at most half as many targets as frames unless asked to keep them.
+bool keeps_targets(const tinygltf::Model& model, const AnimatedNode& node, const SampledNode& sampled,
+                   const Options& options) {
+  if (options.targets == Options::Targets::bake || options.codec.mode == RateMode::lossless) return false;
+  if (!node.morphed || node.skin >= 0) return false;
+  size_t users = 0;
+  for (const tinygltf::Node& other : model.nodes) users += other.mesh == node.mesh;
+  if (users != 1) return false;
+  if (options.targets == Options::Targets::keep) return true;
+  size_t frames = 0;
+  for (const FrameSequence& clip : sampled.primitives[0].clips) frames += clip.frame_count;
+  return 2 * sampled.primitives[0].target_deltas.size() <= frames;
+}
+
+struct Encoded {
+  tinygltf::Model model;
+  CompressReport report;
+};
+
+// Encodes a copy of file's model: the nodes `keep` marks keep their morph targets, the others are baked.
+Status encode_model(const SampledFile& file, const std::vector<bool>& keep, const Options& options, Encoded& out) {
+  out.model = file.model;
+  out.report = CompressReport();
+  std::vector<SampledNode> kept, baked;
+  for (size_t i = 0; i < file.sampled.size(); ++i) (keep[i] ? kept : baked).push_back(file.sampled[i]);
+  const auto report_progress = [&](const std::string& message) { progress(options, message); };
+  SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, options.codec, options.draco, out.report, report_progress));
+  SEGMORPH_RETURN_IF_ERROR(bake_model(out.model, file.scene, baked));
+  return compress_model(out.model, baked, options.codec, options.draco, out.report, report_progress);
+}
+
 int run_encode(const Options& options) {
   const std::string& path = options.inputs[0];
   SampledFile file;
   Status status = load_and_sample(path, options, file);
   if (!status.ok()) return fail(path, status);
-  status = bake_model(file.model, file.scene, file.sampled);
-  CompressReport report;
-  if (status.ok())
-    status = compress_model(file.model, file.sampled, options.codec, options.draco, report,
-                            [&](const std::string& message) { progress(options, message); });
+  // Morph-target meshes that keep their targets are compressed where they are; the others are baked first. With
+  // --targets auto, a file where some mesh could keep them is encoded both ways and the smaller file kept.
+  std::vector<bool> keep(file.sampled.size());
+  bool any_kept = false;
+  for (size_t i = 0; i < file.sampled.size(); ++i)
+    any_kept |= keep[i] = keeps_targets(file.model, *file.sampled[i].node, file.sampled[i], options);
+  Encoded encoded;
+  status = encode_model(file, keep, options, encoded);
+  if (status.ok() && any_kept && options.targets == Options::Targets::automatic) {
+    Encoded baked;
+    progress(options, "encoding again with the morph targets baked, to keep the smaller file");
+    status = encode_model(file, std::vector<bool>(keep.size(), false), options, baked);
+    if (status.ok()) {
+      const size_t kept_size = glb_size(encoded.model), baked_size = glb_size(baked.model);
+      progress(options, "morph targets kept: " + std::to_string(kept_size) + " bytes; baked: " +
+                            std::to_string(baked_size) + " bytes");
+      if (baked_size < kept_size) encoded = std::move(baked);
+    }
+  }
   if (!status.ok()) return fail(path, status);
+  file.model = std::move(encoded.model);
+  const CompressReport& report = encoded.report;
   progress(options, "writing " + options.output);
   status = save_gltf(file.model, options.output);
   if (!status.ok()) return fail(options.output, status);
@@ -392,6 +446,17 @@ int run(int argc, char** argv) {
         options.codec.clusters = size_t(number);
       else
         options.draco.position_bits = int(number);
+    } else if (arg == "--targets") {
+      std::string text;
+      if (!value(text)) return usage_error("--targets needs auto, keep or bake");
+      if (text == "auto")
+        options.targets = Options::Targets::automatic;
+      else if (text == "keep")
+        options.targets = Options::Targets::keep;
+      else if (text == "bake")
+        options.targets = Options::Targets::bake;
+      else
+        return usage_error("--targets takes auto, keep or bake, not '" + text + "'");
     } else if (arg == "--json") {
       options.json = true;
     } else if (arg == "-q" || arg == "--quiet") {
@@ -423,6 +488,8 @@ int run(int argc, char** argv) {
     if (options.inputs.size() != 1) return usage_error(options.command + " takes one input file");
     if (options.output.empty()) return usage_error(options.command + " needs -o OUT");
     if (!has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
+    if (options.targets == Options::Targets::keep && options.codec.mode == RateMode::lossless)
+      return usage_error("--targets keep is lossy: it cannot be combined with --lossless");
     return options.command == "encode" ? run_encode(options) : run_decode(options);
   }
   if (options.command == "verify") {

@@ -293,6 +293,7 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
   }
 
   std::vector<PrimitiveInput> inputs(mesh.primitives.size());
+  out.clip_weights.resize(node.clips.size());
   out.primitives.resize(mesh.primitives.size());
   for (size_t p = 0; p < mesh.primitives.size(); ++p) {
     const tinygltf::Primitive& primitive = mesh.primitives[p];
@@ -358,6 +359,7 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
         weight_track->curve.evaluate(times[f], false, weights.data());
       else
         weights = static_weights;
+      out.clip_weights[c].insert(out.clip_weights[c].end(), weights.begin(), weights.end());
       if (joints) {
         evaluate_global_transforms(model, scene.graph, &clip, times[f], global);
         joint_matrices.resize(joints->size());
@@ -389,6 +391,7 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
       }
     }
   }
+  for (size_t p = 0; p < inputs.size(); ++p) out.primitives[p].target_deltas = std::move(inputs[p].deltas);
   return Status::Ok();
 }
 

@@ -53,6 +53,7 @@ struct SampledPrimitive {
   std::vector<float> rest_positions;  // V × 3, the POSITION attribute as stored
   std::vector<float> rest_normals;    // V × 3 unit normals, empty when the primitive has no NORMAL
   std::vector<float> rest_tangents;   // V × 4, empty when the primitive has no TANGENT
+  std::vector<std::vector<float>> target_deltas;  // per morph target: V × 3 POSITION displacements (empty: none)
   std::vector<FrameSequence> clips;   // one per AnimatedNode::clips entry, same order
 };
 
@@ -64,6 +65,8 @@ Status read_rest_attributes(const tinygltf::Model& model, const tinygltf::Primit
 struct SampledNode {
   const AnimatedNode* node = nullptr;
   std::vector<bool> clip_is_step;  // per clip: every track that moves the node uses STEP
+  // Per clip: frame_count × target_count morph weights at the sampled times (empty without targets).
+  std::vector<std::vector<double>> clip_weights;
   std::vector<SampledPrimitive> primitives;
 };
 

@@ -29,7 +29,10 @@ struct DracoSettings {
   int texcoord_bits = 12;
   int color_bits = 8;
   int generic_bits = 12;
-  int speed = 5;           // Draco's encoding and decoding speed, 0 (best compression) to 10
+  // Draco's encoding and decoding speed, 0 (best compression) to 10. 0: the base mesh is decoded once per file, and
+  // speed 0 measured 3.5 % (Fox), 8.5 % (cow) and 11.6 % (CesiumMan) smaller than Draco's default speed 5, and 1 %
+  // larger on MorphStressTest.
+  int speed = 0;
   // Draco's sequential encoding keeps the vertex order but compresses several times worse than edgebreaker,
   // which reorders (and may merge) vertices; match_decoded_vertices maps them back.
   bool keep_order = false;

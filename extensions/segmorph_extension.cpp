@@ -23,6 +23,13 @@ Status parse_compressed_primitive(const tinygltf::Value& value, CompressedPrimit
   const std::string object = kExtensionName;
   out = CompressedPrimitive();
   if (!get_index(value, "bufferView", out.buffer_view)) return missing(object, "bufferView");
+  if (value.Has("morphTargets")) {
+    if (!value.Get("morphTargets").IsBool() || !value.Get("morphTargets").Get<bool>())
+      return Status(StatusCode::bad_data, object + ": \"morphTargets\" must be true when present");
+    if (value.Has("clips")) return Status(StatusCode::bad_data, object + ": \"morphTargets\" and \"clips\" exclude each other");
+    out.morph_targets = true;
+    return Status::Ok();
+  }
   if (!value.Has("clips") || !value.Get("clips").IsArray() || value.Get("clips").ArrayLen() == 0)
     return missing(object, "clips");
   const tinygltf::Value& clips = value.Get("clips");
@@ -74,7 +81,10 @@ tinygltf::Value compressed_primitive_value(const CompressedPrimitive& primitive)
   }
   tinygltf::Value::Object object;
   object["bufferView"] = tinygltf::Value(primitive.buffer_view);
-  object["clips"] = tinygltf::Value(std::move(clips));
+  if (primitive.morph_targets)
+    object["morphTargets"] = tinygltf::Value(true);
+  else
+    object["clips"] = tinygltf::Value(std::move(clips));
   return tinygltf::Value(std::move(object));
 }
 

@@ -7,6 +7,8 @@
 //       "clips": [ { "animation": 0,            the animation the clip's frames belong to
 //                    "times": 31,               accessor: the frame times (float, one per frame)
 //                    "interpolation": "LINEAR" } ] }   or "STEP"
+// or, on a primitive that keeps its morph targets (their data is the stream's; the weights animation is kept):
+//   "SEGMORPH_animation_compression": { "bufferView": 12, "morphTargets": true }
 // On an animation channel that exists only so that its animation is not empty:
 //   "SEGMORPH_animation_compression": { "placeholder": true }
 #pragma once
@@ -32,7 +34,9 @@ struct CompressedClip {
 
 struct CompressedPrimitive {
   int buffer_view = -1;
-  std::vector<CompressedClip> clips;
+  std::vector<CompressedClip> clips;  // empty when morph_targets
+  // The stream holds one clip whose frame t is the primitive's positions under morph target t at weight 1.
+  bool morph_targets = false;
 };
 
 struct DracoPrimitive {

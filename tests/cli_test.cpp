@@ -335,6 +335,71 @@ TEST(Cli, EncodeDecodeAndVerify) {
   EXPECT_FALSE(fs::exists(directory + "/not.glb"));
 }
 
+// --targets keep: the morph targets stay, filled in from the stream by decode; the weights animation stays.
+TEST(Cli, KeptMorphTargetsEncodeDecodeAndVerify) {
+  const std::string directory = output_directory("kept_targets");
+  const std::string input = sample("AnimatedMorphCube/AnimatedMorphCube.glb");
+  for (const char* target : {"0.5", "0.15"}) {
+    SCOPED_TRACE(target);
+    const std::string encoded = directory + "/cube.gltf", decoded = directory + "/decoded.gltf";
+    Result result = run("encode -q " + input + " -o " + encoded + " --targets keep --error " + target);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const std::string text = read_text(encoded);
+    EXPECT_NE(text.find("\"morphTargets\": true"), std::string::npos);
+    EXPECT_EQ(text.find("\"clips\""), std::string::npos);
+    EXPECT_NE(text.find("\"path\": \"weights\""), std::string::npos);  // the original weights animation
+    EXPECT_NE(text.find("\"targets\""), std::string::npos);
+
+    result = run("verify -q " + input + " " + encoded + " --json");
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const double kg = json_number(result.out, "kg_percent");
+    EXPECT_LE(kg, std::stod(target));
+    EXPECT_GT(kg, 0);
+
+    ASSERT_EQ(run("decode -q " + encoded + " -o " + decoded).exit_code, 0);
+    const std::string restored = read_text(decoded);
+    EXPECT_EQ(restored.find("SEGMORPH_animation_compression"), std::string::npos);
+    EXPECT_EQ(restored.find("KHR_draco_mesh_compression"), std::string::npos);
+    result = run("verify -q " + input + " " + decoded + " --json");
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_DOUBLE_EQ(json_number(result.out, "kg_percent"), kg);
+    EXPECT_EQ(json_number(result.out, "frames"), 127);  // the original animation, at its own key times
+  }
+  // The choice is the smaller file: on this cube the baked form wins (its two weight tracks cost more than
+  // the frames they spare), on SimpleMorph too; --targets bake never keeps them.
+  for (const char* mode : {"auto", "bake"}) {
+    const Result result = run("encode -q " + input + " -o " + directory + "/cube.glb --targets " + std::string(mode));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(read_text(directory + "/cube.glb").find("morphTargets"), std::string::npos) << mode;
+  }
+  EXPECT_EQ(run("encode -q " + input + " -o " + directory + "/x.glb --targets keep --lossless").exit_code, 2);
+  EXPECT_EQ(run("encode -q " + input + " -o " + directory + "/x.glb --targets some").exit_code, 2);
+}
+
+// A kept-targets file whose stream does not match its targets is refused, with nothing written.
+TEST(Cli, KeptMorphTargetsThatDisagreeAreRefused) {
+  const std::string directory = output_directory("kept_targets_bad");
+  const std::string encoded = directory + "/cube.gltf";
+  ASSERT_EQ(run("encode -q " + sample("AnimatedMorphCube/AnimatedMorphCube.glb") + " -o " + encoded +
+                " --targets keep")
+                .exit_code,
+            0);
+  const std::string text = read_text(encoded);
+  std::string one_target = text;
+  const size_t targets = one_target.find("\"targets\": [");
+  ASSERT_NE(targets, std::string::npos);
+  const size_t second = one_target.find("},", targets);
+  const size_t end = one_target.find("]", second);
+  one_target.replace(second + 1, end - second - 1, "");  // the first target only
+  write_text(encoded, one_target);
+  expect_clean_failure(encoded, "disagree with the morph target count", "decode");
+
+  std::string both = text;
+  both.replace(both.find("\"morphTargets\": true"), 20, "\"morphTargets\": true, \"clips\": [{\"animation\": 0}]");
+  write_text(encoded, both);
+  expect_clean_failure(encoded, "exclude each other", "decode");
+}
+
 TEST(Cli, CorruptedEncodedFilesFailCleanlyOrDecode) {
   const std::string directory = output_directory("corrupt_encoded");
   ASSERT_EQ(run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory + "/encoded.glb").exit_code,
