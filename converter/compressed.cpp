@@ -372,6 +372,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
 
     // The clips of this node: each animation's weights channel on the host goes, its frame times stay.
     CompressedPrimitive compressed;
+    int matrix_stand_in = -1;  // the placeholders' node when the host has a matrix
     for (size_t a = 0; a < model.animations.size(); ++a) {
       tinygltf::Animation& animation = model.animations[a];
       for (size_t c = 0; c < animation.channels.size(); ++c) {
@@ -381,8 +382,20 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
         compressed.clips.push_back({int(a), sampler.input, sampler.interpolation == "STEP"});
         animation.channels.erase(animation.channels.begin() + long(c));
         if (animation.channels.empty()) {
-          // A placeholder keeps the animation valid: the node's own translation, held over the clip.
-          const tinygltf::Node& target = model.nodes[size_t(host)];
+          // A placeholder keeps the animation valid: the node's own translation, held over the clip. A node
+          // with a matrix cannot be animated; an empty child of it, made for the purpose, holds still instead.
+          int placeholder_node = host;
+          if (!model.nodes[size_t(host)].matrix.empty()) {
+            if (matrix_stand_in < 0) {
+              tinygltf::Node stand_in;
+              stand_in.name = "segmorph placeholder";
+              model.nodes.push_back(stand_in);
+              matrix_stand_in = int(model.nodes.size()) - 1;
+              model.nodes[size_t(host)].children.push_back(matrix_stand_in);
+            }
+            placeholder_node = matrix_stand_in;
+          }
+          const tinygltf::Node& target = model.nodes[size_t(placeholder_node)];
           const size_t frames = model.accessors[size_t(sampler.input)].count;
           std::vector<float> translation;
           for (size_t f = 0; f < frames; ++f)
@@ -398,7 +411,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
           animation.samplers.push_back(hold);
           tinygltf::AnimationChannel placeholder;
           placeholder.sampler = int(animation.samplers.size()) - 1;
-          placeholder.target_node = host;
+          placeholder.target_node = placeholder_node;
           placeholder.target_path = "translation";
           placeholder.extensions[kExtensionName] = placeholder_value();
           animation.channels.push_back(placeholder);
@@ -454,6 +467,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
 Status compress_targets(tinygltf::Model& model, const std::vector<SampledNode>& kept, const CodecSettings& settings,
                         const DracoSettings& draco, CompressReport& report,
                         const std::function<void(const std::string&)>& progress) {
+  if (kept.empty()) return Status::Ok();
   if (settings.mode == RateMode::lossless)
     return Status(StatusCode::invalid_argument, "morph targets are kept only by lossy encodes");
   AccessorWriter writer(model);
@@ -463,7 +477,6 @@ Status compress_targets(tinygltf::Model& model, const std::vector<SampledNode>& 
       return Status(StatusCode::invalid_argument, "only the targets of unskinned morph meshes are kept");
     SEGMORPH_RETURN_IF_ERROR(compress_targets_node(model, node, settings, draco, writer, report, progress));
   }
-  if (kept.empty()) return Status::Ok();
   // The weights animations stay; their outputs take the smallest exact-enough form glTF allows: none when all
   // zero, normalized 16-bit integers when within [0, 1] or [−1, 1] (a weight off by at most 1/65535 of its
   // range moves a vertex by that fraction of its displacement), floats otherwise.
@@ -501,6 +514,10 @@ Status decode_draco_primitives(tinygltf::Model& model) {
       auto it = primitive.extensions.find(kDracoExtensionName);
       if (it == primitive.extensions.end()) continue;
       const std::string what = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
+      if (primitive.mode != -1 && primitive.mode != TINYGLTF_MODE_TRIANGLES)
+        return Status(StatusCode::unsupported,
+                      what + ": only triangle primitives are read from KHR_draco_mesh_compression (mode " +
+                          std::to_string(primitive.mode) + ")");
       DracoPrimitive draco;
       SEGMORPH_RETURN_IF_ERROR(parse_draco_primitive(it->second, draco));
       const unsigned char* data = nullptr;
@@ -557,6 +574,12 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
     const std::string what = "mesh " + std::to_string(m);
     if (primitives.size() != model.meshes[m].primitives.size())
       return Status(StatusCode::bad_data, what + ": some primitives are compressed and some are not");
+    for (const tinygltf::Primitive& primitive : model.meshes[m].primitives)
+      if (primitive.mode != -1 && primitive.mode != TINYGLTF_MODE_TRIANGLES)
+        return Status(StatusCode::bad_data, what + ": a compressed primitive must be a triangle list (mode 4)");
+    for (const tinygltf::Node& node : model.nodes)
+      if (node.mesh == int(m) && node.skin >= 0)
+        return Status(StatusCode::bad_data, what + ": the node of a compressed mesh must not have a skin");
     const bool targets = primitives[0].morph_targets;
     for (const CompressedPrimitive& other : primitives)
       if (other.morph_targets != targets)
@@ -630,7 +653,12 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
         return Status(StatusCode::bad_data, what + ": the stream's clip count disagrees with the extension's");
       for (size_t c = 0; c < out.clips.size(); ++c) {
         FrameSequence& clip = out.clips[c];
-        SEGMORPH_RETURN_IF_ERROR(read_floats(model, streams[i][p].clips[c].times, what + " clip times", clip.times));
+        const int times = streams[i][p].clips[c].times;
+        if (times < 0 || size_t(times) >= model.accessors.size() ||
+            model.accessors[size_t(times)].componentType != TINYGLTF_COMPONENT_TYPE_FLOAT ||
+            model.accessors[size_t(times)].type != TINYGLTF_TYPE_SCALAR)
+          return Status(StatusCode::bad_data, what + ": a clip's times must be a FLOAT SCALAR accessor");
+        SEGMORPH_RETURN_IF_ERROR(read_floats(model, times, what + " clip times", clip.times));
         if (clip.times.size() != clip.frame_count)
           return Status(StatusCode::bad_data, what + ": a clip's times disagree with its frame count");
         for (size_t f = 1; f < clip.times.size(); ++f)
