@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <queue>
 #include <unordered_map>
 
 namespace segmorph {
@@ -126,7 +128,9 @@ Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded,
   std::unordered_multimap<uint64_t, uint32_t> grid;
   grid.reserve(original.vertex_count);
   for (uint32_t v = 0; v < original.vertex_count; ++v)
-    grid.emplace(key(cell(&positions[size_t(v) * 3], 0), cell(&positions[size_t(v) * 3], 1), cell(&positions[size_t(v) * 3], 2)), v);
+    grid.emplace(key(cell(&positions[size_t(v) * 3], 0), cell(&positions[size_t(v) * 3], 1),
+                     cell(&positions[size_t(v) * 3], 2)),
+                 v);
 
   // Other attributes, by semantic, to tell apart vertices that share a position (seams).
   std::vector<std::pair<const BaseMeshAttribute*, const BaseMeshAttribute*>> others;
@@ -136,30 +140,123 @@ Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded,
           original.attributes[b].components == decoded.attributes[a].components)
         others.push_back({&original.attributes[b], &decoded.attributes[a]});
 
-  std::vector<bool> claimed(original.vertex_count, false);
-  source.assign(decoded.vertex_count, UINT32_MAX);
-  for (uint32_t p = 0; p < decoded.vertex_count; ++p) {
+  // How unlike original vertex v decoded vertex p is; infinite beyond a step.
+  auto cost = [&](uint32_t p, uint32_t v) {
     const float* q = &decoded_positions[size_t(p) * 3];
-    double best_cost = INFINITY;
-    uint32_t best = UINT32_MAX;
+    double distance = 0;
+    for (int c = 0; c < 3; ++c) distance += std::pow(double(q[c]) - positions[size_t(v) * 3 + size_t(c)], 2);
+    if (distance > step * step) return double(INFINITY);
+    double total = distance / (step * step);
+    for (const auto& [from, to] : others)
+      for (int c = 0; c < from->components; ++c)
+        total += std::pow(double(to->values[size_t(p) * size_t(to->components) + size_t(c)]) -
+                              from->values[size_t(v) * size_t(from->components) + size_t(c)],
+                          2);
+    return total;
+  };
+  // The originals within a step of decoded vertex p, in increasing index order.
+  auto candidates = [&](uint32_t p) {
+    const float* q = &decoded_positions[size_t(p) * 3];
+    std::vector<uint32_t> found;
     for (int64_t dx = -1; dx <= 1; ++dx)
       for (int64_t dy = -1; dy <= 1; ++dy)
         for (int64_t dz = -1; dz <= 1; ++dz) {
           const auto range = grid.equal_range(key(cell(q, 0) + dx, cell(q, 1) + dy, cell(q, 2) + dz));
-          for (auto it = range.first; it != range.second; ++it) {
-            const uint32_t v = it->second;
-            double distance = 0;
-            for (int c = 0; c < 3; ++c) distance += std::pow(double(q[c]) - positions[size_t(v) * 3 + size_t(c)], 2);
-            if (distance > step * step) continue;
-            double cost = distance / (step * step);
-            for (const auto& [from, to] : others)
-              for (int c = 0; c < from->components; ++c)
-                cost += std::pow(double(to->values[size_t(p) * size_t(to->components) + size_t(c)]) -
-                                     from->values[size_t(v) * size_t(from->components) + size_t(c)], 2);
-            if (claimed[v]) cost += 1e6;  // prefer vertices no decoded vertex came from yet
-            if (cost < best_cost || (cost == best_cost && v < best)) best_cost = cost, best = v;
+          for (auto it = range.first; it != range.second; ++it)
+            if (cost(p, it->second) < INFINITY) found.push_back(it->second);
+        }
+    std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    return found;
+  };
+
+  // Draco keeps every triangle (it renumbers vertices and reorders triangles and their corners). Each decoded
+  // triangle is matched to an original triangle whose corners are near its own, and its corners come from that
+  // triangle's. Nearness alone is not enough: vertices of different parts can lie within a step of each other,
+  // alike in every attribute (measured: 78 triangles of the chicken and 8 of the horse came out joining vertices of
+  // different triangles when each vertex took its nearest original), and such a vertex would follow the wrong
+  // part's trajectory. So triangles are matched surest first, the sureness of a triangle being how much better its
+  // best original triangle fits than the next one, where a fit counts nearness and, far above it, whether the
+  // original triangle is still free and whether it agrees with the corners already matched; each match makes its
+  // neighbours' choices surer, so matches grow over each part from its least ambiguous triangles.
+  std::vector<std::vector<uint32_t>> incident(original.vertex_count), decoded_incident(decoded.vertex_count);
+  for (size_t t = 0; t < original.triangles.size() / 3; ++t)
+    for (int c = 0; c < 3; ++c) incident[original.triangles[t * 3 + size_t(c)]].push_back(uint32_t(t));
+  const size_t decoded_triangles = decoded.triangles.size() / 3;
+  for (size_t d = 0; d < decoded_triangles; ++d)
+    for (int c = 0; c < 3; ++c) decoded_incident[decoded.triangles[d * 3 + size_t(c)]].push_back(uint32_t(d));
+  std::vector<std::vector<uint32_t>> corner_candidates(decoded.vertex_count);
+  for (uint32_t p = 0; p < decoded.vertex_count; ++p)
+    if (!decoded_incident[p].empty()) corner_candidates[p] = candidates(p);
+  constexpr double kTaken = 1e12, kDisagrees = 1e6;
+  std::vector<bool> taken(original.triangles.size() / 3, false), matched(decoded_triangles, false);
+  source.assign(decoded.vertex_count, UINT32_MAX);
+  struct Fit {
+    double score = INFINITY, sureness = 0;
+    uint32_t triangle = 0, corners[3] = {0, 0, 0};
+  };
+  auto best_fit = [&](uint32_t d) {
+    const uint32_t* corner = &decoded.triangles[size_t(d) * 3];
+    Fit best;
+    double second = INFINITY;
+    for (uint32_t v0 : corner_candidates[corner[0]])
+      for (uint32_t t : incident[v0])
+        for (int c = 0; c < 3; ++c) {
+          const uint32_t* o = &original.triangles[size_t(t) * 3];
+          if (o[c] != v0) continue;
+          const uint32_t v[3] = {v0, o[(c + 1) % 3], o[(c + 2) % 3]};
+          double score = taken[t] ? kTaken : 0.0;
+          for (int k = 0; k < 3; ++k) {
+            score += cost(corner[k], v[k]);
+            if (source[corner[k]] != UINT32_MAX && source[corner[k]] != v[k]) score += kDisagrees;
+          }
+          if (score < best.score) {
+            second = best.score;
+            best.score = score, best.triangle = t, best.corners[0] = v[0], best.corners[1] = v[1], best.corners[2] = v[2];
+          } else if (score < second) {
+            second = score;
           }
         }
+    best.sureness = second == INFINITY ? INFINITY : second - best.score;
+    return best;
+  };
+  // Surest first; equally sure ones in decoded order.
+  std::priority_queue<std::pair<double, int64_t>> queue;
+  for (size_t d = 0; d < decoded_triangles; ++d) queue.push({best_fit(uint32_t(d)).sureness, -int64_t(d)});
+  while (!queue.empty()) {
+    const auto [sureness, negative_d] = queue.top();
+    queue.pop();
+    const uint32_t d = uint32_t(-negative_d);
+    if (matched[d]) continue;
+    const Fit fit = best_fit(d);
+    if (fit.sureness != sureness) {  // its neighbourhood changed since it was queued
+      queue.push({fit.sureness, negative_d});
+      continue;
+    }
+    matched[d] = true;
+    if (fit.score == INFINITY) continue;  // no original triangle fits: its corners fall back on nearness below
+    taken[fit.triangle] = true;
+    const uint32_t* corner = &decoded.triangles[size_t(d) * 3];
+    for (int k = 0; k < 3; ++k) {
+      if (source[corner[k]] != UINT32_MAX) continue;
+      source[corner[k]] = fit.corners[k];
+      for (uint32_t neighbour : decoded_incident[corner[k]])
+        if (!matched[neighbour]) queue.push({best_fit(neighbour).sureness, -int64_t(neighbour)});
+    }
+  }
+  std::vector<bool> claimed(original.vertex_count, false);
+  for (uint32_t p = 0; p < decoded.vertex_count; ++p)
+    if (source[p] != UINT32_MAX) claimed[source[p]] = true;
+  // Vertices no matched triangle names (unused by triangles, or in a triangle Draco changed): the nearest original,
+  // preferring those no decoded vertex came from yet, so that duplicates map one to one where Draco kept them apart.
+  for (uint32_t p = 0; p < decoded.vertex_count; ++p) {
+    if (source[p] != UINT32_MAX) continue;
+    double best_cost = INFINITY;
+    uint32_t best = UINT32_MAX;
+    for (uint32_t v : candidates(p)) {
+      const double total = cost(p, v) + (claimed[v] ? 1e6 : 0.0);
+      if (total < best_cost) best_cost = total, best = v;
+    }
     if (best == UINT32_MAX)
       return Status(StatusCode::numerical, "a vertex Draco decoded matches no vertex of the base mesh");
     source[p] = best;

@@ -48,9 +48,11 @@ Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& setting
 Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<std::string, int>& attribute_ids,
                               BaseMesh& mesh, size_t max_vertices = size_t(1) << 26);
 
-// For each vertex Draco decoded, the vertex of `original` it came from: the one within a quantization step of
-// its position whose other attributes are closest (vertices no one else claims first, so that duplicates map
-// one to one where Draco kept them apart). Fails when a decoded vertex has no original within the step.
+// For each vertex Draco decoded, the vertex of `original` it came from. Draco keeps the triangles: each decoded
+// triangle is matched to the original triangle whose corners are nearest (within a quantization step, other
+// attributes alike), and a vertex comes from the original its triangles name most often; a vertex in no matched
+// triangle comes from the nearest original (one no other decoded vertex came from, when there is one). Fails when a
+// decoded vertex has no original within the step.
 Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings,
                               std::vector<uint32_t>& source);
 

@@ -5,8 +5,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <random>
+#include <set>
 
+#include "accessor.h"
+#include "gltf_io.h"
+#include "sample.h"
+#include "test_files.h"
 #include "test_meshes.h"
 
 namespace segmorph {
@@ -97,6 +103,99 @@ TEST(DracoBaseMesh, EdgebreakerVerticesMatchBackToTheirOriginals) {
   std::sort(original.begin(), original.end());
   std::sort(mapped.begin(), mapped.end());
   EXPECT_EQ(original, mapped);
+}
+
+// Two copies of the sphere a third of a quantization step apart, alike in every attribute: nearness cannot tell
+// their vertices apart, the triangles can. Every decoded triangle must come back as one original triangle.
+TEST(DracoBaseMesh, VerticesWithinAStepOfAnotherPartMatchThroughTheirTriangles) {
+  const BaseMesh one = sphere_mesh();
+  DracoSettings settings;
+  settings.position_bits = 10;
+  const float offset = float(4.0 / ((1 << settings.position_bits) - 1) / 3);
+  BaseMesh mesh = one;
+  mesh.vertex_count = 2 * one.vertex_count;
+  for (size_t a = 0; a < mesh.attributes.size(); ++a) {
+    const std::vector<float>& values = one.attributes[a].values;
+    mesh.attributes[a].values.insert(mesh.attributes[a].values.end(), values.begin(), values.end());
+  }
+  for (size_t v = one.vertex_count; v < mesh.vertex_count; ++v) mesh.attributes[0].values[v * 3] += offset;
+  for (uint32_t index : one.triangles) mesh.triangles.push_back(index + uint32_t(one.vertex_count));
+
+  std::vector<uint8_t> bytes;
+  std::map<std::string, int> ids;
+  ASSERT_TRUE(encode_draco_base_mesh(mesh, settings, bytes, ids).ok());
+  BaseMesh decoded;
+  ASSERT_TRUE(decode_draco_base_mesh(bytes.data(), bytes.size(), ids, decoded).ok());
+  std::vector<uint32_t> source;
+  ASSERT_TRUE(match_decoded_vertices(mesh, decoded, settings, source).ok());
+  std::vector<std::array<uint32_t, 3>> original, mapped;
+  for (size_t t = 0; t < mesh.triangles.size(); t += 3) {
+    std::array<uint32_t, 3> a = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
+    std::sort(a.begin(), a.end());
+    original.push_back(a);
+  }
+  for (size_t t = 0; t < decoded.triangles.size(); t += 3) {
+    std::array<uint32_t, 3> b = {source[decoded.triangles[t]], source[decoded.triangles[t + 1]],
+                                 source[decoded.triangles[t + 2]]};
+    std::sort(b.begin(), b.end());
+    mapped.push_back(b);
+  }
+  std::sort(original.begin(), original.end());
+  std::sort(mapped.begin(), mapped.end());
+  EXPECT_EQ(decoded.vertex_count, mesh.vertex_count);
+  EXPECT_EQ(original, mapped);
+}
+
+// On the sequences, whose parts touch (the chicken has 41 components): under the match, every decoded triangle is
+// an original triangle, up to vertices at the same position (seam copies, which move together).
+TEST(DracoBaseMesh, SequencesDecodedTrianglesAreOriginalTriangles) {
+  if (!testing::have_shared_samples()) GTEST_SKIP() << "../shared/samples is absent: the sequences are not checked";
+  for (const char* name : {"ChickenCrossing/chicken.glb", "HorseGallop/horse-gallop.glb", "Cow_pcow/cow.glb"}) {
+    SCOPED_TRACE(name);
+    tinygltf::Model model;
+    ASSERT_TRUE(load_gltf(std::string(SEGMORPH_SHARED_SAMPLES_DIR) + "/sequences/" + name, model).ok());
+    const tinygltf::Primitive& primitive = model.meshes[0].primitives[0];
+    SampledPrimitive rest;
+    ASSERT_TRUE(read_rest_attributes(model, primitive, name, rest).ok());
+    BaseMesh mesh;
+    mesh.vertex_count = rest.rest_positions.size() / 3;
+    mesh.attributes.push_back({"POSITION", 3, rest.rest_positions});
+    if (!rest.rest_normals.empty()) mesh.attributes.push_back({"NORMAL", 3, rest.rest_normals});
+    ASSERT_TRUE(read_uints(model, primitive.indices, name, mesh.triangles).ok());
+    // Vertices at the same position, as one.
+    std::map<std::array<float, 3>, uint32_t> groups;
+    std::vector<uint32_t> group(mesh.vertex_count);
+    for (size_t v = 0; v < mesh.vertex_count; ++v) {
+      const float* p = &rest.rest_positions[v * 3];
+      group[v] = groups.emplace(std::array<float, 3>{p[0], p[1], p[2]}, uint32_t(groups.size())).first->second;
+    }
+    std::set<std::array<uint32_t, 3>> original;
+    for (size_t t = 0; t < mesh.triangles.size(); t += 3) {
+      std::array<uint32_t, 3> a = {group[mesh.triangles[t]], group[mesh.triangles[t + 1]], group[mesh.triangles[t + 2]]};
+      std::sort(a.begin(), a.end());
+      original.insert(a);
+    }
+    for (int bits : {11, 12, 14}) {
+      SCOPED_TRACE(bits);
+      DracoSettings settings;
+      settings.position_bits = bits;
+      std::vector<uint8_t> bytes;
+      std::map<std::string, int> ids;
+      ASSERT_TRUE(encode_draco_base_mesh(mesh, settings, bytes, ids).ok());
+      BaseMesh decoded;
+      ASSERT_TRUE(decode_draco_base_mesh(bytes.data(), bytes.size(), ids, decoded).ok());
+      std::vector<uint32_t> source;
+      ASSERT_TRUE(match_decoded_vertices(mesh, decoded, settings, source).ok());
+      size_t foreign = 0;
+      for (size_t t = 0; t < decoded.triangles.size(); t += 3) {
+        std::array<uint32_t, 3> b = {group[source[decoded.triangles[t]]], group[source[decoded.triangles[t + 1]]],
+                                     group[source[decoded.triangles[t + 2]]]};
+        std::sort(b.begin(), b.end());
+        foreign += original.count(b) == 0;
+      }
+      EXPECT_EQ(foreign, 0u) << "decoded triangles joining vertices of different original triangles";
+    }
+  }
 }
 
 TEST(DracoBaseMesh, DecodingTwiceGivesTheSameFloats) {
