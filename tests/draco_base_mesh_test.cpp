@@ -105,6 +105,15 @@ TEST(DracoBaseMesh, EdgebreakerVerticesMatchBackToTheirOriginals) {
   EXPECT_EQ(original, mapped);
 }
 
+// `mesh` through Draco and back, and the original of each decoded vertex.
+bool round_trip(const BaseMesh& mesh, const DracoSettings& settings, BaseMesh& decoded, std::vector<uint32_t>& source) {
+  std::vector<uint8_t> bytes;
+  std::map<std::string, int> ids;
+  return encode_draco_base_mesh(mesh, settings, bytes, ids).ok() &&
+         decode_draco_base_mesh(bytes.data(), bytes.size(), ids, decoded).ok() &&
+         match_decoded_vertices(mesh, decoded, settings, source).ok();
+}
+
 // Two copies of the sphere a third of a quantization step apart, alike in every attribute: nearness cannot tell
 // their vertices apart, the triangles can. Every decoded triangle must come back as one original triangle.
 TEST(DracoBaseMesh, VerticesWithinAStepOfAnotherPartMatchThroughTheirTriangles) {
@@ -121,13 +130,9 @@ TEST(DracoBaseMesh, VerticesWithinAStepOfAnotherPartMatchThroughTheirTriangles) 
   for (size_t v = one.vertex_count; v < mesh.vertex_count; ++v) mesh.attributes[0].values[v * 3] += offset;
   for (uint32_t index : one.triangles) mesh.triangles.push_back(index + uint32_t(one.vertex_count));
 
-  std::vector<uint8_t> bytes;
-  std::map<std::string, int> ids;
-  ASSERT_TRUE(encode_draco_base_mesh(mesh, settings, bytes, ids).ok());
   BaseMesh decoded;
-  ASSERT_TRUE(decode_draco_base_mesh(bytes.data(), bytes.size(), ids, decoded).ok());
   std::vector<uint32_t> source;
-  ASSERT_TRUE(match_decoded_vertices(mesh, decoded, settings, source).ok());
+  ASSERT_TRUE(round_trip(mesh, settings, decoded, source));
   std::vector<std::array<uint32_t, 3>> original, mapped;
   for (size_t t = 0; t < mesh.triangles.size(); t += 3) {
     std::array<uint32_t, 3> a = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
@@ -179,13 +184,9 @@ TEST(DracoBaseMesh, SequencesDecodedTrianglesAreOriginalTriangles) {
       SCOPED_TRACE(bits);
       DracoSettings settings;
       settings.position_bits = bits;
-      std::vector<uint8_t> bytes;
-      std::map<std::string, int> ids;
-      ASSERT_TRUE(encode_draco_base_mesh(mesh, settings, bytes, ids).ok());
       BaseMesh decoded;
-      ASSERT_TRUE(decode_draco_base_mesh(bytes.data(), bytes.size(), ids, decoded).ok());
       std::vector<uint32_t> source;
-      ASSERT_TRUE(match_decoded_vertices(mesh, decoded, settings, source).ok());
+      ASSERT_TRUE(round_trip(mesh, settings, decoded, source));
       size_t foreign = 0;
       for (size_t t = 0; t < decoded.triangles.size(); t += 3) {
         std::array<uint32_t, 3> b = {group[source[decoded.triangles[t]]], group[source[decoded.triangles[t + 1]]],
