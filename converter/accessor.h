@@ -48,6 +48,8 @@ class AccessorWriter {
   int add_sparse_floats(size_t count, int type, const std::vector<uint32_t>& indices, const std::vector<float>& values);
   // An unsigned-int index accessor (TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER).
   int add_indices(const std::vector<uint32_t>& indices);
+  // count × components unsigned shorts of type TINYGLTF_TYPE_* (JOINTS_n, which glTF requires to be integers).
+  int add_unsigned_shorts(const std::vector<uint16_t>& data, int type, int target);
   // A bufferView holding `bytes` (for data an extension refers to).
   int add_view(const void* data, size_t bytes, int target);
 

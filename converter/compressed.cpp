@@ -1,6 +1,7 @@
 #include "compressed.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "accessor.h"
@@ -125,6 +126,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       DracoSettings primitive_draco = draco;
       if (primitive_draco.position_bits == 0)
         primitive_draco.position_bits = automatic_position_bits(base.attributes[0].values, frames.clips, settings);
+      const auto draco_start = std::chrono::steady_clock::now();
       DracoPrimitive draco_primitive;
       std::vector<uint8_t> draco_bytes;
       SEGMORPH_RETURN_IF_ERROR(encode_draco_base_mesh(base, primitive_draco, draco_bytes, draco_primitive.attributes));
@@ -135,6 +137,8 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       // merge duplicates; each decoded vertex follows the original it came from).
       std::vector<uint32_t> source;
       SEGMORPH_RETURN_IF_ERROR(match_decoded_vertices(base, decoded, primitive_draco, source));
+      report.ms_draco +=
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - draco_start).count();
       std::vector<FrameSequence> reordered(frames.clips.size());
       for (size_t c = 0; c < frames.clips.size(); ++c) {
         const FrameSequence& clip = frames.clips[c];
@@ -242,9 +246,22 @@ Status decode_draco_primitives(tinygltf::Model& model) {
             model.accessors[size_t(accessor->second)].count != decoded.vertex_count)
           return Status(StatusCode::bad_data,
                         what + ": Draco's " + attribute.semantic + " disagrees with its accessor");
-        accessor->second =
-            writer.add_floats(attribute.values.data(), decoded.vertex_count, type_of_components(attribute.components),
-                              attribute.semantic == "POSITION", TINYGLTF_TARGET_ARRAY_BUFFER);
+        const int type = type_of_components(attribute.components);
+        if (attribute.semantic.rfind("JOINTS_", 0) == 0) {
+          // glTF requires joints to be unsigned integers (files other tools compress, skinned ones, have them).
+          std::vector<uint16_t> joints(attribute.values.size());
+          for (size_t i = 0; i < joints.size(); ++i) {
+            const float joint = attribute.values[i];
+            if (!(joint >= 0 && joint <= 65535 && joint == std::floor(joint)))
+              return Status(StatusCode::bad_data,
+                            what + ": Draco's " + attribute.semantic + " holds a non-integer joint");
+            joints[i] = uint16_t(joint);
+          }
+          accessor->second = writer.add_unsigned_shorts(joints, type, TINYGLTF_TARGET_ARRAY_BUFFER);
+        } else {
+          accessor->second = writer.add_floats(attribute.values.data(), decoded.vertex_count, type,
+                                               attribute.semantic == "POSITION", TINYGLTF_TARGET_ARRAY_BUFFER);
+        }
       }
       if (primitive.indices >= 0 && (size_t(primitive.indices) >= model.accessors.size() ||
                                      model.accessors[size_t(primitive.indices)].count != decoded.triangles.size()))
