@@ -11,7 +11,8 @@
 // --out      where every file, log and result goes (default out/bench/, out/bench-quick/ with --quick);
 //            OUT/results/PART.json keep each part's figures, so parts can be run one at a time
 // --doc      the page to write (default docs/benchmarks.md; its charts go to docs/bench/)
-// --parts    which parts to run (default all); the page is rebuilt from the saved results of every part
+// --parts    which parts to run (default all; --parts '' runs none); the page is always rebuilt from the saved
+//            results of every part
 // --quick    the test suite's run: one bundled file (samples/Fox/Fox.glb), two segmorph rates, one setting
 //            per anchor, two tiny scaling points; the page goes to OUT/benchmarks.md; then checks that every
 //            output exists and every measured value is sane (no timing is judged)
@@ -44,7 +45,7 @@ function parseArguments(argv) {
       return argv[++i];
     };
     if (arg === '--quick') options.quick = true;
-    else if (arg === '--parts') options.parts = value().split(',');
+    else if (arg === '--parts') options.parts = value().split(',').filter((p) => p !== '');
     else if (arg === '--build') options.build = path.resolve(value());
     else if (arg === '--samples') options.samples = path.resolve(value());
     else if (arg === '--out') options.out = path.resolve(value());
@@ -71,10 +72,11 @@ function inputs(tools, options) {
   const list = [];
   for (const file of files) {
     if (!existsSync(file)) throw new StepError(`${file} is absent`);
-    const info = tools.run(path.join(options.out, 'info.log'), 'segmorph', ['info', '-q', file, '--json']);
-    if (!info.ok) throw new StepError(`segmorph info ${file} failed (${path.join(options.out, 'info.log')})`);
+    const log = path.join(options.out, 'info.log');
+    const info = tools.run(log, 'segmorph', ['info', '-q', file, '--json']);
     const label = path.relative(options.quick ? root : options.samples, file);
-    if (JSON.parse(info.stdout).primitives.length === 0) { progress(`skip ${label}: nothing animated`); continue; }
+    if (!info.ok && /nothing animated/.test(Tools.tail(log))) { progress(`skip ${label}: nothing animated`); continue; }
+    if (!info.ok) throw new StepError(`segmorph info ${file} failed: ${Tools.tail(log)}`);
     list.push({ label, file });
   }
   return list;

@@ -57,6 +57,11 @@ export class Tools {
     return { ok: result.status === 0, stdout: result.stdout || '', time };
   }
 
+  // The log of a run: what a failed step printed, for the error message.
+  static tail(log) {
+    return existsSync(log) ? readFileSync(log, 'utf8').trim().split('\n').pop() : '';
+  }
+
   // segmorph verify ORIGINAL FILE --json, or null when it fails (the log says why).
   verify(log, original, file) {
     const result = this.run(log, 'segmorph', ['verify', '-q', original, file, '--json']);
