@@ -24,23 +24,27 @@ function tickLabel(value) {
   return String(Number(value.toPrecision(3)));
 }
 
-// The axis mapping and its ticks. A log axis spans whole 1-2-5 steps around the data; a linear one "nice" steps.
+// The nearest 1-2-5 step (1, 2, 5, 10, 20, ...) at or below `v` (direction -1) or at or above it (+1).
+function step125(v, direction) {
+  const decade = 10 ** Math.floor(Math.log10(v));
+  const candidates = [1, 2, 5, 10].map((m) => m * decade);
+  return direction < 0 ? [...candidates].reverse().find((c) => c <= v * (1 + 1e-9))
+                       : candidates.find((c) => c >= v * (1 - 1e-9));
+}
+
+// The axis mapping and its ticks. A log axis spans whole 1-2-5 steps around the data (ticks at 1-2-5, 1-3 or
+// whole decades as the span grows); a linear one "nice" steps from 0 when the data is positive.
 function axis(values, { log = false } = {}, length) {
   let low = Math.min(...values), high = Math.max(...values);
   if (log) {
-    low /= 1.12;  // a margin, so that no point sits on the frame
-    high *= 1.12;
-    const steps = [1, 2, 5];
-    const below = (v) => { const d = Math.floor(Math.log10(v)); const m = v / 10 ** d; const s = [...steps].reverse().find((x) => x <= m + 1e-9) ?? 1; return s * 10 ** d; };
-    const above = (v) => { const d = Math.floor(Math.log10(v)); const m = v / 10 ** d; const s = steps.find((x) => x >= m - 1e-9); return s ? s * 10 ** d : 10 ** (d + 1); };
-    low = below(low);
-    high = above(high);
+    low = step125(low / 1.12, -1);  // a margin, so that no point sits on the frame
+    high = step125(high * 1.12, +1);
     if (high <= low) high = low * 10;
     const span = Math.log10(high / low);
     const ticks = [];
     for (let d = Math.floor(Math.log10(low)); d <= Math.ceil(Math.log10(high)); d++)
-      for (const s of span > 4 ? [1] : span > 2 ? [1, 3] : steps) {
-        const t = s * 10 ** d;
+      for (const m of span > 4 ? [1] : span > 2 ? [1, 3] : [1, 2, 5]) {
+        const t = m * 10 ** d;
         if (t >= low * (1 - 1e-9) && t <= high * (1 + 1e-9)) ticks.push(Number(t.toPrecision(3)));
       }
     return { map: (v) => (Math.log10(v / low) / span) * length, ticks, accepts: (v) => Number.isFinite(v) && v > 0 };
