@@ -11,13 +11,14 @@
 //
 // "Smaller at equal or lower KG": segmorph's file against the least bytes gltfpack needs for a KG no higher
 // than segmorph's, interpolated linearly in log KG between its -vp settings as ../shared/samples/README.md's
-// reference figures are read (gltfpackAt says how the ends and settings that another beats are handled);
+// reference figures are read (leastBytesAt in lib/rate_distortion.mjs says how the ends and settings that another beats are handled);
 // "n/a" when segmorph's KG is above every gltfpack file's: there is no gltfpack file at equal or higher KG
 // to be smaller than.
 
 import { readFileSync } from 'node:fs';
 import path from 'node:path';
 import { readAsset } from '../tests/js/glb.mjs';
+import { leastBytesAt } from './lib/rate_distortion.mjs';
 
 if (process.argv.length !== 3) {
   console.error('usage: node bench/compare_gltfpack.mjs OUTDIR');
@@ -66,30 +67,6 @@ const cell = (run, file) =>
     ? `${run.bytes} B · ${fixed(bpvf(run.bytes, file))} · ${kgText(run.kg)}`
     : 'failed';
 
-// The least bytes gltfpack needs for a KG of at most `kg`: { bytes, where }, or null when `kg` is above the KG
-// of every -vp measured (-vp 8's, usually: coarser settings are not run). Between two settings on the front
-// (those no other setting beats on both bytes and KG; on small files a coarser -vp can land nearer the
-// original than a finer one) the bytes are interpolated linearly in log KG; past the front's coarsest end
-// they stay at its bytes; below its finest KG they are the finest file's, whose KG is then higher.
-function gltfpackAt(kg, runs) {
-  const measured = runs.filter((r) => r.kg > 0 && r.bytes !== null).map((r) => ({ x: Math.log(r.kg), bytes: r.bytes, setting: r.setting }));
-  if (measured.length === 0 || kg > Math.max(...measured.map((p) => Math.exp(p.x)))) return null;
-  measured.sort((a, b) => a.x - b.x || a.bytes - b.bytes);
-  const front = measured.filter((p, i) => measured.slice(0, i).every((q) => q.bytes > p.bytes));
-  const x = Math.log(kg);
-  const first = front[0], last = front[front.length - 1];
-  if (x <= first.x) return { bytes: first.bytes, where: `${first.setting}, whose KG is higher` };
-  if (x >= last.x) return { bytes: last.bytes, where: `${last.setting}, whose KG is lower` };
-  for (let i = 1; i < front.length; i++) {
-    if (x <= front[i].x) {
-      const t = (x - front[i - 1].x) / (front[i].x - front[i - 1].x);
-      return { bytes: front[i - 1].bytes + t * (front[i].bytes - front[i - 1].bytes),
-               where: `between ${front[i].setting} and ${front[i - 1].setting}` };
-    }
-  }
-  return null;  // not reached: x lies within the front
-}
-
 const flags = [];
 let failed = false;
 const verdicts = new Map(); // label -> [{ run, at, smaller }]
@@ -116,7 +93,7 @@ for (const [label, file] of files) {
         failed = true;
       }
     }
-    const at = gltfpackAt(run.kg, file.gltfpack);
+    const at = leastBytesAt(run.kg, file.gltfpack);
     const smaller = at === null ? 'n/a' : run.bytes < at.bytes ? 'yes' : 'no';
     if (smaller !== 'yes') flags.push(`${label}, segmorph ${run.setting}: ${smaller === 'no' ? 'not smaller than gltfpack at equal KG' : 'KG above gltfpack -vp 8\'s: nothing to compare with'}`);
     list.push({ run, at, smaller });

@@ -300,6 +300,16 @@ int AccessorWriter::add_indices(const std::vector<uint32_t>& indices) {
   return int(model_.accessors.size()) - 1;
 }
 
+int AccessorWriter::add_unsigned_shorts(const std::vector<uint16_t>& data, int type, int target) {
+  tinygltf::Accessor accessor;
+  accessor.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+  accessor.count = data.size() / size_t(components_of_type(type));
+  accessor.type = type;
+  accessor.bufferView = add_view(data.data(), data.size() * sizeof(uint16_t), target);
+  model_.accessors.push_back(accessor);
+  return int(model_.accessors.size()) - 1;
+}
+
 int AccessorWriter::add_described(const float* data, size_t count, int type) {
   tinygltf::Accessor accessor = float_accessor(count, type);
   set_bounds(accessor, data, count, components_of_type(type));

@@ -51,6 +51,8 @@ class AccessorWriter {
   int add_normalized_shorts(const float* data, size_t count, int type, bool is_signed);
   // An unsigned-int index accessor (TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER).
   int add_indices(const std::vector<uint32_t>& indices);
+  // count × components unsigned shorts of type TINYGLTF_TYPE_* (JOINTS_n, which glTF requires to be integers).
+  int add_unsigned_shorts(const std::vector<uint16_t>& data, int type, int target);
   // A bufferView holding `bytes` (for data an extension refers to).
   int add_view(const void* data, size_t bytes, int target);
 

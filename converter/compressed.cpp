@@ -1,6 +1,7 @@
 #include "compressed.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "accessor.h"
@@ -86,14 +87,17 @@ Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& p
   return Status::Ok();
 }
 
-// Compresses the base mesh and finds where Draco put each vertex.
-Status encode_base(const BaseMesh& base, PrimitiveEncoding& out) {
+// Compresses the base mesh and finds where Draco put each vertex; adds the time taken to `milliseconds`.
+Status encode_base(const BaseMesh& base, PrimitiveEncoding& out, double& milliseconds) {
+  const auto start = std::chrono::steady_clock::now();
   SEGMORPH_RETURN_IF_ERROR(encode_draco_base_mesh(base, out.draco, out.draco_bytes, out.draco_primitive.attributes));
   SEGMORPH_RETURN_IF_ERROR(decode_draco_base_mesh(out.draco_bytes.data(), out.draco_bytes.size(),
                                                   out.draco_primitive.attributes, out.decoded));
   // Draco's edgebreaker reorders vertices and may merge duplicates; each decoded vertex follows the original it
   // came from.
-  return match_decoded_vertices(base, out.decoded, out.draco, out.source);
+  SEGMORPH_RETURN_IF_ERROR(match_decoded_vertices(base, out.decoded, out.draco, out.source));
+  milliseconds += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return Status::Ok();
 }
 
 // `clips` with their vertices in the order the decoder gets back from Draco.
@@ -245,7 +249,7 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
     SEGMORPH_RETURN_IF_ERROR(read_base_mesh(model, primitive, first.triangles, first.vertex_count, what, base));
     if (encoding.draco.position_bits == 0)
       encoding.draco.position_bits = automatic_position_bits(base.attributes[0].values, {targets}, settings);
-    SEGMORPH_RETURN_IF_ERROR(encode_base(base, encoding));
+    SEGMORPH_RETURN_IF_ERROR(encode_base(base, encoding, report.ms_draco));
     const std::vector<FrameSequence> reordered_targets = in_decoded_order({targets}, encoding);
     const std::vector<FrameSequence> reordered = in_decoded_order(sampled.clips, encoding);
 
@@ -438,7 +442,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
           read_base_mesh(model, primitive, frames.clips[0].triangles, frames.clips[0].vertex_count, what, base));
       if (encoding.draco.position_bits == 0)
         encoding.draco.position_bits = automatic_position_bits(base.attributes[0].values, frames.clips, settings);
-      SEGMORPH_RETURN_IF_ERROR(encode_base(base, encoding));
+      SEGMORPH_RETURN_IF_ERROR(encode_base(base, encoding, report.ms_draco));
 
       // The animation, against the base positions the decoder will have.
       CodecSettings primitive_settings = settings;
@@ -534,9 +538,22 @@ Status decode_draco_primitives(tinygltf::Model& model) {
             model.accessors[size_t(accessor->second)].count != decoded.vertex_count)
           return Status(StatusCode::bad_data,
                         what + ": Draco's " + attribute.semantic + " disagrees with its accessor");
-        accessor->second =
-            writer.add_floats(attribute.values.data(), decoded.vertex_count, type_of_components(attribute.components),
-                              attribute.semantic == "POSITION", TINYGLTF_TARGET_ARRAY_BUFFER);
+        const int type = type_of_components(attribute.components);
+        if (attribute.semantic.rfind("JOINTS_", 0) == 0) {
+          // glTF requires joints to be unsigned integers (files other tools compress, skinned ones, have them).
+          std::vector<uint16_t> joints(attribute.values.size());
+          for (size_t i = 0; i < joints.size(); ++i) {
+            const float joint = attribute.values[i];
+            if (!(joint >= 0 && joint <= 65535 && joint == std::floor(joint)))
+              return Status(StatusCode::bad_data,
+                            what + ": Draco's " + attribute.semantic + " holds a non-integer joint");
+            joints[i] = uint16_t(joint);
+          }
+          accessor->second = writer.add_unsigned_shorts(joints, type, TINYGLTF_TARGET_ARRAY_BUFFER);
+        } else {
+          accessor->second = writer.add_floats(attribute.values.data(), decoded.vertex_count, type,
+                                               attribute.semantic == "POSITION", TINYGLTF_TARGET_ARRAY_BUFFER);
+        }
       }
       if (primitive.indices >= 0 && (size_t(primitive.indices) >= model.accessors.size() ||
                                      model.accessors[size_t(primitive.indices)].count != decoded.triangles.size()))

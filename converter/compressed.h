@@ -19,6 +19,7 @@ namespace segmorph {
 struct CompressReport {
   std::vector<EncodeReport> primitives;  // one per encoded primitive
   size_t draco_bytes = 0, animation_bytes = 0;
+  double ms_draco = 0;  // the base meshes: Draco encoding, the decoding the encoder needs, the vertex map back
 };
 
 // `model` has just been baked (bake_model) from `sampled`. Replaces each baked primitive's morph targets by a

@@ -322,10 +322,10 @@ int run_encode(const Options& options) {
         "{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"primitives\":%zu,\"clusters\":%.0f,"
         "\"e_pi_before_refinement\":%.6g,\"e_pi\":%.6g,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,"
         "\"draco_bytes\":%zu,\"animation_bytes\":%zu,\"milliseconds\":{\"segmentation\":%.1f,\"motion\":%.1f,"
-        "\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f}}\n",
+        "\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"draco\":%.1f}}\n",
         json_string(path).c_str(), json_string(options.output).c_str(), bytes, report.primitives.size(), clusters,
         e_pi_before, e_pi, bpvf, vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0,
-        report.draco_bytes, report.animation_bytes, ms[0], ms[1], ms[2], ms[3], ms[4]);
+        report.draco_bytes, report.animation_bytes, ms[0], ms[1], ms[2], ms[3], ms[4], report.ms_draco);
   } else {
     std::printf(
         "%s: %zu bytes, %.3f bits per vertex per frame (animation %zu bytes, base meshes %zu bytes), "

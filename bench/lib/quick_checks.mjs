@@ -1,0 +1,61 @@
+// The checks of the quick mode (ctest bench_quick): every part produced its outputs and every measured value
+// is sane. Correctness only: no time is compared with anything.
+
+import { existsSync, readFileSync } from 'node:fs';
+import path from 'node:path';
+import { CODECS } from './rate_distortion.mjs';
+
+const finite = (x) => typeof x === 'number' && Number.isFinite(x);
+
+// Returns one message per problem found.
+export function checkQuick(parts, doc, chartDir) {
+  const problems = [];
+  const expect = (condition, message) => { if (!condition) problems.push(message); };
+  for (const name of ['rd', 'speed', 'scaling']) expect(parts[name], `no results for the ${name} part`);
+
+  for (const file of parts.rd?.files ?? []) {
+    expect(file.shape && file.shape.vertex_frames > 0, `${file.label}: no vertex-frame count`);
+    for (const family of CODECS.map((c) => c.family))
+      expect(file.runs.some((r) => r.family === family && !r.failed), `${file.label}: no measured ${family} file`);
+    for (const r of file.runs) {
+      const what = `${file.label}, ${r.family} ${r.setting}`;
+      if (r.failed) continue;  // already a flag
+      expect(r.bytes > 0 && finite(r.bpvf) && r.bpvf > 0, `${what}: bytes ${r.bytes}, bpvf ${r.bpvf}`);
+      expect(finite(r.kg) && r.kg >= 0 && finite(r.rmse) && finite(r.max), `${what}: KG ${r.kg}, RMSE ${r.rmse}, max ${r.max}`);
+      expect(r.wall_ms > 0 && r.max_rss_kb > 0, `${what}: no time or memory measured`);
+      if (r.bound) expect(r.kg <= r.bound, `${what}: KG ${r.kg} % above ${r.bound} %`);
+      if (r.family === CODECS[6].family) expect(r.kg < 1e-3, `${what}: raw float morph targets measure KG ${r.kg} %`);
+      else if (r.family.startsWith('segmorph')) expect(r.encode && r.encode.milliseconds, `${what}: no encode report`);
+      else expect(r.kg < 5, `${what}: KG ${r.kg} %: a misread or mispaired file`);
+    }
+  }
+  for (const file of parts.speed?.files ?? []) {
+    const m = file.result;
+    expect(!m.failed, `${file.label}: ${m.failed}`);
+    if (m.failed) continue;
+    for (const [name, run] of Object.entries({ encode: m.encode, decode: m.decode, gltfpack: m.gltfpack }))
+      expect(run.wall_ms > 0 && run.cpu_ms >= 0 && run.max_rss_kb > 0, `${file.label}: ${name} has no time or memory`);
+    for (const stage of ['segmentation', 'motion', 'prediction', 'rate_control', 'entropy', 'draco'])
+      expect(finite(m.encode.stages[stage]), `${file.label}: encode reports no ${stage} time`);
+  }
+  for (const { label, stages } of parts.speed?.codec ?? []) {
+    expect(!stages.failed, `${label}: ${stages.failed}`);
+    for (const name of ['EncodeWhole', 'DecodeWhole', 'DecodeFrameCopyLimit'])
+      expect(stages[name] && stages[name].vfps > 0, `${label}: codec_benchmark has no ${name} throughput`);
+  }
+  const scaling = parts.scaling?.result;
+  expect(scaling && !scaling.failed, `scaling: ${scaling?.failed}`);
+  for (const p of [...(scaling?.byVertices ?? []), ...(scaling?.byFrames ?? [])]) {
+    const what = `scaling V ${p.vertices} × F ${p.frames}`;
+    expect(p.stream_bytes > 0 && finite(p.kg_percent) && p.kg_percent <= 0.15 * 1.01, `${what}: stream ${p.stream_bytes} B, KG ${p.kg_percent} %`);
+    expect(p.peak_rss_kb.encode > 0 && p.milliseconds.encode > 0, `${what}: no time or memory`);
+  }
+
+  expect(existsSync(doc) && readFileSync(doc, 'utf8').includes('## Rate and distortion'), `${doc} was not written`);
+  for (const chart of ['stages.svg', 'scaling.svg', ...(parts.rd?.files ?? []).map((f) => `rd-${path.basename(f.label).replace(/\.(glb|gltf)$/i, '').toLowerCase().replace(/[^a-z0-9]+/g, '-')}.svg`)]) {
+    const file = path.join(chartDir, chart);
+    const text = existsSync(file) ? readFileSync(file, 'utf8') : '';
+    expect(text.startsWith('<svg') && text.trimEnd().endsWith('</svg>') && !text.includes('NaN'), `${file}: missing or not a whole SVG`);
+  }
+  return problems;
+}

@@ -1,0 +1,405 @@
+// docs/benchmarks.md and its charts, from the results the harness saved (any subset of its parts).
+
+import { mkdirSync, writeFileSync } from 'node:fs';
+import path from 'node:path';
+import { CODECS, leastBytesAt } from './rate_distortion.mjs';
+import { SPEED_ERROR, SPEED_GLTFPACK_BITS, STAGES } from './speed.mjs';
+import { barChart, lineChart, panels } from './svg_chart.mjs';
+
+const BAKE = CODECS[6].family;
+const ANCHORS = CODECS.slice(2, 6).map((c) => c.family);
+const fixed = (x) => (x === null || x === undefined || !Number.isFinite(x) ? '—'
+  : x < 10 ? x.toFixed(3) : x < 100 ? x.toFixed(2) : x.toFixed(1));
+const kgText = (kg) => (kg === null || kg === undefined ? '—' : kg === 0 ? '0' : `${kg.toPrecision(3)} %`);
+const mb = (kb) => (kb ? (kb / 1024).toFixed(0) : '—');
+const ms = (x) => (x === null || x === undefined ? '—' : x >= 100 ? x.toFixed(0) : x.toFixed(1));
+const seconds = (x) => (x / 1000).toFixed(x >= 10000 ? 1 : 2);
+const slug = (label) => path.basename(label).replace(/\.(glb|gltf)$/i, '').toLowerCase().replace(/[^a-z0-9]+/g, '-');
+const shapeText = (shape) => (shape ? `${shape.vertices} × ${shape.frames}` : '—');
+const ok = (runs) => runs.filter((r) => !r.failed);
+
+function metaLine(name, meta) {
+  if (!meta) return null;
+  const load = meta.load ? `, load average ${meta.load.map((x) => x.toFixed(2)).join(' / ')} (start / end)` : '';
+  return `- ${name}: ${meta.started}, ${meta.minutes.toFixed(1)} min${load}.`;
+}
+
+// The rate-distortion chart of one file: bpvf against KG, every codec a curve, bake a reference line.
+function rdChart(file) {
+  const runs = ok(file.runs);
+  const series = CODECS.filter((c) => c.family !== BAKE).map((c) => ({
+    name: c.family,
+    points: runs.filter((r) => r.family === c.family).map((r) => [r.kg, r.bpvf]).sort((a, b) => a[0] - b[0]),
+    dashed: c.tool === 'gltf-transform',
+  })).filter((s) => s.points.length > 0);
+  const bake = runs.find((r) => r.family === BAKE);
+  return lineChart({
+    title: `${file.label} (V × F = ${shapeText(file.shape)})`,
+    x: { label: 'KG error (%)', log: true },
+    y: { label: 'bits per vertex per frame (whole file)', log: true },
+    series,
+    references: bake ? [{ name: `raw floats (bake): ${fixed(bake.bpvf)} bpvf, KG 0`, y: bake.bpvf }] : [],
+  });
+}
+
+// When every run of an anchor has a lower KG than `kg`: its smallest file, an upper bound on what it needs.
+function upperBound(kg, runs) {
+  const below = runs.filter((r) => r.kg <= kg);
+  if (below.length === 0) return null;
+  return { bytes: Math.min(...below.map((r) => r.bytes)), upper: true };
+}
+
+function rateDistortion(rd, charts, lines, flags) {
+  const print = (line = '') => lines.push(line);
+  print('## Rate and distortion');
+  print();
+  print('Every output of every tool measured by `segmorph verify` against its input. **bpvf**: 8 × the bytes of the ' +
+        'file the tool wrote / Σ V × F over the input\'s animated primitives and clips (the same denominator for every ' +
+        'tool); **KG**: Karni & Gotsman\'s error in %, the worst animated primitive; RMSE and maximum error over the ' +
+        'first frame\'s bounding-box diagonal in the full tables. Charts: both axes logarithmic; the dashed line is ' +
+        'the raw float morph targets `segmorph bake` writes (KG 0).');
+  print();
+  print('Settings: segmorph `encode --bpvf 0.5, 1, 2, 4, 8` and `--error 1, 0.5, 0.15, 0.05`; gltfpack 1.3 ' +
+        '`-cc -af 0 -vp 8` to `16`; glTF-Transform 4.5 `meshopt`, `quantize` and `draco` with `--quantize-position ' +
+        '8, 10, 12, 14, 16` (their other options at their defaults). Draco (KHR_draco_mesh_compression) does not ' +
+        'cover morph targets: on morph-target files glTF-Transform compresses the base mesh only and leaves the ' +
+        'targets as floats; on skinned files it compresses the whole mesh, and the animation is the joints\'.');
+  print();
+
+  for (const target of [0.15, 0.5]) {
+    print(`### At segmorph's KG, --error ${target}`);
+    print();
+    print('bpvf of the least bytes each anchor needs for segmorph\'s KG or lower, interpolated in log KG between its ' +
+          'settings (the settings no other beats on both bytes and KG), and in brackets its bytes over segmorph\'s. ' +
+          '"≤": even the anchor\'s coarsest setting measured has a lower KG than segmorph, so its smallest file is an ' +
+          'upper bound (a coarser setting might need fewer bytes); "—": the anchor produced nothing measurable.');
+    print();
+    print(`| file | V × F | raw float (bake) | segmorph --error ${target} | ${ANCHORS.join(' | ')} |`);
+    print(`|---|---|---|---|${ANCHORS.map(() => '---|').join('')}`);
+    for (const file of rd.files) {
+      const runs = ok(file.runs);
+      const seg = runs.find((r) => r.family === CODECS[0].family && r.bound === target);
+      const bake = runs.find((r) => r.family === BAKE);
+      if (!seg) { print(`| ${file.label} | ${shapeText(file.shape)} | ${fixed(bake?.bpvf)} | failed |${ANCHORS.map(() => ' |').join('')}`); continue; }
+      const cells = ANCHORS.map((family) => {
+        const anchor = runs.filter((r) => r.family === family);
+        const at = leastBytesAt(seg.kg, anchor) ?? upperBound(seg.kg, anchor);
+        if (!at) return '—';
+        const bound = at.upper ? '≤ ' : '';
+        return `${bound}${fixed((8 * at.bytes) / file.shape.vertex_frames)} (${bound}${(at.bytes / seg.bytes).toFixed(2)}×)`;
+      });
+      print(`| ${file.label} | ${shapeText(file.shape)} | ${fixed(bake?.bpvf)} | ${fixed(seg.bpvf)} @ ${kgText(seg.kg)} | ${cells.join(' | ')} |`);
+    }
+    print();
+  }
+
+  print('### Per file');
+  print();
+  for (const file of rd.files) {
+    const name = `rd-${slug(file.label)}.svg`;
+    charts.set(name, rdChart(file));
+    print(`#### ${file.label}`);
+    print();
+    print(`![bpvf against KG error, ${file.label}](${charts.link(name)})`);
+    print();
+    print('<details><summary>every run</summary>');
+    print();
+    print('| codec | setting | bytes | bpvf | KG | RMSE / diag | max / diag | wall time | peak memory |');
+    print('|---|---|---|---|---|---|---|---|---|');
+    for (const r of file.runs) {
+      if (r.failed) { print(`| ${r.family} | ${r.setting} | failed: ${r.failed} | | | | | | |`); continue; }
+      print(`| ${r.family} | ${r.setting} | ${r.bytes} | ${fixed(r.bpvf)} | ${kgText(r.kg)} | ${r.rmse.toExponential(2)} | ` +
+            `${r.max.toExponential(2)} | ${ms(r.wall_ms)} ms | ${mb(r.max_rss_kb)} MB |`);
+    }
+    print();
+    print('</details>');
+    print();
+    for (const r of file.runs) {
+      if (r.failed) flags.push(`${file.label}, ${r.family} ${r.setting}: ${r.failed}`);
+      else if (r.bound !== null && r.bound !== undefined && r.kg > r.bound)
+        flags.push(`${file.label}, segmorph ${r.setting}: KG ${kgText(r.kg)} is above the requested ${r.bound} %`);
+    }
+  }
+  bpvfTargets(rd, lines);
+}
+
+// segmorph --bpvf: the whole file against the target, split into what the rate control budgets (the animation
+// streams and the Draco base meshes) and the rest of the file (images, JSON, meshes and animation it leaves as
+// they are).
+function bpvfTargets(rd, lines) {
+  const print = (line = '') => lines.push(line);
+  const targets = [...new Set(rd.files.flatMap((f) => f.runs.filter((r) => r.target_bpvf).map((r) => r.target_bpvf)))];
+  if (targets.length === 0) return;
+  print('### segmorph --bpvf: target and result');
+  print();
+  print('Per target: the whole file\'s bpvf, then in brackets the part the animation streams and the Draco base ' +
+        'meshes take (from encode --json) and the part the rest of the file takes (images, JSON, and the meshes, skins ' +
+        'and node animation segmorph leaves as they are). A whole file more than 10 % off its target is in bold.');
+  print();
+  print(`| file | ${targets.map((t) => `--bpvf ${t}`).join(' | ')} |`);
+  print(`|---|${targets.map(() => '---|').join('')}`);
+  for (const file of rd.files) {
+    const cells = targets.map((target) => {
+      const r = file.runs.find((x) => x.target_bpvf === target);
+      if (!r || r.failed || !r.encode) return 'failed';
+      const coded = (8 * (r.encode.animation_bytes + r.encode.draco_bytes)) / file.shape.vertex_frames;
+      const whole = Math.abs(r.bpvf - target) > 0.1 * target ? `**${fixed(r.bpvf)}**` : fixed(r.bpvf);
+      return `${whole} (${fixed(coded)} + ${fixed(r.bpvf - coded)})`;
+    });
+    print(`| ${file.label} | ${cells.join(' | ')} |`);
+  }
+  print();
+}
+
+// Vertex-frames per second of a whole command.
+const throughput = (shape, wallMs) => (shape ? `${(shape.vertex_frames / (wallMs / 1000) / 1e6).toFixed(1)} M` : '—');
+
+function speedAndMemory(speed, shapes, charts, lines, flags) {
+  const print = (line = '') => lines.push(line);
+  print('## Speed and memory');
+  print();
+  print(`Per file, each command run ${speed.repeats} times under \`run_measured\` (bench/run_measured.cpp: wall time, ` +
+        'user + system CPU time and the peak resident set from wait4), median wall and CPU time, largest peak memory. ' +
+        `segmorph \`encode --error ${SPEED_ERROR}\` (its default; the stage times are those its --json reports for the ` +
+        'median run, summed over primitives; "rest": loading, sampling, baking, the check that the stream decodes to the ' +
+        'encoder\'s frames, writing), segmorph `decode` of that file (reading, Draco, the animation, writing standard morph ' +
+        `targets; its throughput counts the input's vertex-frames over the whole command), and gltfpack \`-cc -af 0 -vp ${SPEED_GLTFPACK_BITS}\` on the same input (a Node.js process: WebAssembly).`);
+  print();
+  const stageNames = STAGES.map((s) => s.replace('_', ' '));
+  print(`| file | V × F | encode wall (CPU) | ${stageNames.join(' | ')} | rest | encode peak | decode wall (CPU) | decode vertex-frames/s | decode peak | gltfpack wall (CPU) | gltfpack peak | encode / gltfpack wall |`);
+  print(`|---|---|---|${STAGES.map(() => '---|').join('')}---|---|---|---|---|---|---|---|`);
+  const rows = [];
+  for (const file of speed.files) {
+    const m = file.result;
+    if (m.failed) { flags.push(`${file.label}, speed: ${m.failed}`); print(`| ${file.label} | | failed: ${m.failed} |`); continue; }
+    const stages = STAGES.map((s) => m.encode.stages[s] ?? 0);
+    const rest = Math.max(0, m.encode.wall_ms - stages.reduce((a, b) => a + b, 0));
+    rows.push({ label: file.label, stages, rest, decode: m.decode.wall_ms, gltfpack: m.gltfpack.wall_ms });
+    print(`| ${file.label} | ${shapeText(shapes.get(file.label))} | ${ms(m.encode.wall_ms)} (${ms(m.encode.cpu_ms)}) ms | ${stages.map(ms).join(' | ')} | ${ms(rest)} | ` +
+          `${mb(m.encode.max_rss_kb)} MB | ${ms(m.decode.wall_ms)} (${ms(m.decode.cpu_ms)}) ms | ${throughput(shapes.get(file.label), m.decode.wall_ms)} | ${mb(m.decode.max_rss_kb)} MB | ` +
+          `${ms(m.gltfpack.wall_ms)} (${ms(m.gltfpack.cpu_ms)}) ms | ${mb(m.gltfpack.max_rss_kb)} MB | ${(m.encode.wall_ms / m.gltfpack.wall_ms).toFixed(2)}× |`);
+  }
+  print();
+  if (rows.length > 0) {
+    charts.set('stages.svg', barChart({
+      title: `segmorph encode --error ${SPEED_ERROR}: wall time per stage`,
+      x: { label: 'milliseconds (wall, median)' },
+      categories: rows.map((r) => path.basename(r.label)),
+      stacks: [...stageNames.map((name, k) => ({ name, values: rows.map((r) => r.stages[k]) })),
+               { name: 'rest of the command (load, sample, bake, check, write)', values: rows.map((r) => r.rest), color: '#c7c7c7' }],
+      marks: [{ name: `gltfpack -cc -vp ${SPEED_GLTFPACK_BITS}, whole command`, values: rows.map((r) => r.gltfpack) },
+              { name: 'segmorph decode, whole command', values: rows.map((r) => r.decode), color: '#d62728' }],
+    }));
+    print(`![encode time per stage](${charts.link('stages.svg')})`);
+    print();
+  }
+
+  if (speed.codec.length === 0) return;
+  print('### The codec alone (Google Benchmark)');
+  print();
+  print(`\`build/bench/codec_benchmark FILE --error ${SPEED_ERROR}\` on each sequence: the codec's stages on the first ` +
+        'animated primitive, encoded against a stand-in base mesh (no glTF, no Draco, no files); CPU time per ' +
+        'iteration, one core. Decode throughput in vertex-frames per second, next to a plain copy of the restored ' +
+        'frames (V × F × 3 floats copied once, `DecodeFrameCopyLimit`: the practical limit of any decoder).');
+  print();
+  const names = ['EncodeWhole', 'EncodeSpectralMorseFunction', 'EncodeAffineMotion', 'EncodePrediction',
+                 'EncodeMeasureSubbands/3', 'EncodeEntropy', 'DecodeWhole', 'DecodeEntropy', 'DecodeFrames'];
+  print(`| sequence | V × F | ${names.join(' | ')} | decode throughput | copy throughput | copy / decode |`);
+  print(`|---|---|${names.map(() => '---|').join('')}---|---|---|`);
+  for (const { label, stages } of speed.codec) {
+    if (stages.failed) { flags.push(`${label}, codec_benchmark: ${stages.failed}`); continue; }
+    const decode = stages.DecodeWhole?.vfps, copy = stages.DecodeFrameCopyLimit?.vfps;
+    print(`| ${label} | ${shapeText(shapes.get(label))} | ${names.map((n) => (stages[n] ? `${ms(stages[n].ms)} ms` : '—')).join(' | ')} | ` +
+          `${decode ? (decode / 1e6).toFixed(1) : '—'} M vf/s | ${copy ? (copy / 1e6).toFixed(0) : '—'} M vf/s | ${decode && copy ? (copy / decode).toFixed(0) : '—'}× |`);
+  }
+  print();
+  print('EncodeSpectralMorseFunction is the Laplace–Beltrami eigenpairs and heat-diffusion function of the segmentation; ' +
+        'EncodeMeasureSubbands/3 one rate-control measurement of the residuals at 3 candidate steps per axis (the rate ' +
+        'control makes several); DecodeEntropy the range decoder alone and DecodeFrames everything after it.');
+  print();
+}
+
+// Log-log slope of `y` against `x` between two points: the exponent of the growth.
+const exponent = (a, b, x, y) => Math.log(y(b) / y(a)) / Math.log(x(b) / x(a));
+
+function scalingPart(scaling, charts, lines, flags) {
+  const print = (line = '') => lines.push(line);
+  print('## Scaling');
+  print();
+  const result = scaling.result;
+  if (result.failed) { flags.push(`scaling: ${result.failed}`); print(`Failed: ${result.failed}`); print(); return; }
+  const { plan } = scaling;
+  print('`build/bench/codec_scaling --vertices V --frames F` (bench/codec_scaling.cpp): a torus of about V vertices ' +
+        '(one closed surface, 2V triangles) whose ring and tube swell in travelling waves while it bends, twists and ' +
+        `drifts, generated in memory; encoded at the default --error ${SPEED_ERROR} against a stand-in base, decoded, ` +
+        'measured. One process per point. Times are wall clock; "draco" is the Draco encoding, decoding and vertex ' +
+        'matching of the base mesh the container does; peak memory is the process\'s peak resident set while building ' +
+        'the frames ("input"), during the encoder and during the decoder (reset between them).');
+  print();
+  const stageKeys = ['segmentation', 'motion', 'prediction', 'rate_control', 'entropy'];
+  const table = (points) => {
+    print(`| V | F | input | K | encode | ${stageKeys.map((s) => s.replace('_', ' ')).join(' | ')} | draco | decode | copy | peak: input | encode | decode | stream bpvf | KG |`);
+    print(`|---|---|---|---|---|${stageKeys.map(() => '---|').join('')}---|---|---|---|---|---|---|---|`);
+    for (const p of points) {
+      const t = p.milliseconds;
+      print(`| ${p.vertices} | ${p.frames} | ${p.input_mb.toFixed(0)} MB | ${p.clusters} | ${seconds(t.encode)} s | ` +
+            `${stageKeys.map((s) => seconds(t[s])).join(' | ')} | ${ms(t.draco)} ms | ${ms(t.decode)} ms | ${ms(t.copy)} ms | ` +
+            `${mb(p.peak_rss_kb.input)} MB | ${mb(p.peak_rss_kb.encode)} MB | ${mb(p.peak_rss_kb.decode)} MB | ${fixed(p.bpvf)} | ${kgText(p.kg_percent)} |`);
+      if (!(p.kg_percent <= SPEED_ERROR * 1.01)) flags.push(`scaling V ${p.vertices} × F ${p.frames}: KG ${p.kg_percent} % above ${SPEED_ERROR} %`);
+    }
+    print();
+  };
+  const growth = (points, x, what) => {
+    if (points.length < 3) return;
+    const [a, b, c] = [points[0], points[points.length - 2], points[points.length - 1]];
+    const rate = (y) => `${exponent(a, c, x, y).toFixed(2)} over the whole range, ${exponent(b, c, x, y).toFixed(2)} between the last two points`;
+    print(`Growth exponents (log-log slope, ${what}): encode time ${rate((p) => p.milliseconds.encode)}; ` +
+          `segmentation ${rate((p) => p.milliseconds.segmentation)}; rate control ${rate((p) => p.milliseconds.rate_control)}; ` +
+          `decode ${rate((p) => p.milliseconds.decode)}; encoder peak memory ${rate((p) => p.peak_rss_kb.encode)}.`);
+    print();
+  };
+  print(`### Against V (F = ${plan.fixedFrames})`);
+  print();
+  table(result.byVertices);
+  growth(result.byVertices, (p) => p.vertices, 'against V');
+  print(`### Against F (V ≈ ${plan.fixedVertices})`);
+  print();
+  table(result.byFrames);
+  growth(result.byFrames, (p) => p.frames, 'against F');
+
+  const timeSeries = (points, x) => [
+    ['encode (whole)', (p) => p.milliseconds.encode], ['segmentation', (p) => p.milliseconds.segmentation],
+    ['rate control', (p) => p.milliseconds.rate_control], ['motion, prediction, entropy', (p) => p.milliseconds.motion + p.milliseconds.prediction + p.milliseconds.entropy],
+    ['Draco base mesh', (p) => p.milliseconds.draco], ['decode', (p) => p.milliseconds.decode], ['copying the frames', (p) => p.milliseconds.copy],
+  ].map(([name, y]) => ({ name, points: points.map((p) => [x(p), y(p) / 1000]) }));
+  const memorySeries = (points, x) => [
+    ['encoder peak', (p) => p.peak_rss_kb.encode], ['decoder peak', (p) => p.peak_rss_kb.decode], ['the frames, V × F × 3 floats', (p) => p.input_mb * 1e6 / 1024],
+  ].map(([name, y]) => ({ name, points: points.map((p) => [x(p), y(p) / 1024]) }));
+  const size = { width: 720, height: 380, legendWidth: 250 };
+  charts.set('scaling.svg', panels([
+    lineChart({ ...size, title: `Time against V (F = ${plan.fixedFrames})`, x: { label: 'vertices', log: true }, y: { label: 'seconds', log: true }, series: timeSeries(result.byVertices, (p) => p.vertices) }),
+    lineChart({ ...size, title: `Peak memory against V (F = ${plan.fixedFrames})`, x: { label: 'vertices', log: true }, y: { label: 'MB', log: true }, series: memorySeries(result.byVertices, (p) => p.vertices) }),
+    lineChart({ ...size, title: `Time against F (V ≈ ${plan.fixedVertices})`, x: { label: 'frames', log: true }, y: { label: 'seconds', log: true }, series: timeSeries(result.byFrames, (p) => p.frames) }),
+    lineChart({ ...size, title: `Peak memory against F (V ≈ ${plan.fixedVertices})`, x: { label: 'frames', log: true }, y: { label: 'MB', log: true }, series: memorySeries(result.byFrames, (p) => p.frames) }),
+  ], 2));
+  print(`![time and memory against V and F](${charts.link('scaling.svg')})`);
+  print();
+}
+
+// Ratios over files: "median 2.1× (0.5× to 19×)".
+function spread(values) {
+  const sorted = [...values].sort((a, b) => a - b);
+  const median = sorted.length % 2 ? sorted[(sorted.length - 1) / 2] : (sorted[sorted.length / 2 - 1] + sorted[sorted.length / 2]) / 2;
+  const x = (v) => `${v.toFixed(v < 10 ? 2 : 1)}×`;
+  return `median ${x(median)} (${x(sorted[0])} to ${x(sorted[sorted.length - 1])})`;
+}
+
+// The headline figures, computed from the tables below.
+function summary(parts, lines) {
+  const print = (line = '') => lines.push(line);
+  print('## Summary');
+  print();
+  if (parts.rd) {
+    for (const target of [0.5, 0.15]) {
+      const cells = ANCHORS.map((family) => {
+        const ratios = [];
+        let smaller = 0, compared = 0;
+        for (const file of parts.rd.files) {
+          const runs = ok(file.runs);
+          const seg = runs.find((r) => r.family === CODECS[0].family && r.bound === target);
+          const at = seg && leastBytesAt(seg.kg, runs.filter((r) => r.family === family));
+          if (!at) continue;
+          compared++;
+          if (seg.bytes < at.bytes) smaller++;
+          ratios.push(at.bytes / seg.bytes);
+        }
+        return compared ? `${family}: smaller on ${smaller} of ${compared} files, its bytes / segmorph's ${spread(ratios)}` : `${family}: nothing to compare`;
+      });
+      print(`- segmorph \`--error ${target}\` against each anchor at equal or lower KG (files where the anchor has settings on both sides of segmorph's KG): ${cells.join('; ')}.`);
+    }
+
+    const sequences = parts.rd.files.filter((f) => f.label.startsWith('sequences/'));
+    const raw = sequences.map((f) => {
+      const runs = ok(f.runs);
+      const seg = runs.find((r) => r.family === CODECS[0].family && r.bound === 0.15), bake = runs.find((r) => r.family === BAKE);
+      return seg && bake ? `${path.basename(f.label)} ${(bake.bytes / seg.bytes).toFixed(0)}×` : null;
+    }).filter(Boolean);
+    if (raw.length) print(`- Against raw float morph targets at \`--error 0.15\`: ${raw.join(', ')} fewer bytes.`);
+  }
+  if (parts.speed) {
+    const ratios = parts.speed.files.filter((f) => !f.result.failed).map((f) => f.result.encode.wall_ms / f.result.gltfpack.wall_ms);
+    if (ratios.length) print(`- Encode time (whole command) over gltfpack's on the same file: ${spread(ratios)}.`);
+    const decode = parts.speed.codec.filter((c) => !c.stages.failed && c.stages.DecodeWhole && c.stages.DecodeFrameCopyLimit)
+      .map((c) => `${path.basename(c.label)} ${(c.stages.DecodeWhole.vfps / 1e6).toFixed(0)} M vf/s (copy ${(c.stages.DecodeFrameCopyLimit.vfps / 1e6).toFixed(0)} M)`);
+    if (decode.length) print(`- Codec decode throughput, vertex-frames per second: ${decode.join(', ')}.`);
+  }
+  const scaling = parts.scaling?.result;
+  if (scaling && !scaling.failed && scaling.byVertices.length > 1) {
+    const [a, z] = [scaling.byVertices[0], scaling.byVertices[scaling.byVertices.length - 1]];
+    print(`- Scaling: ${z.vertices} vertices × ${z.frames} frames encode in ${seconds(z.milliseconds.encode)} s with a ` +
+          `${mb(z.peak_rss_kb.encode)} MB peak (frames ${z.input_mb.toFixed(0)} MB) and decode in ${seconds(z.milliseconds.decode)} s; ` +
+          `from ${a.vertices} vertices, encode time grows as V^${exponent(a, z, (p) => p.vertices, (p) => p.milliseconds.encode).toFixed(2)}.`);
+  }
+  print();
+}
+
+// Writes `doc` (markdown) and the charts into `chartDir`, linked from the doc by relative paths. `parts`:
+// { rd, speed, scaling } (each optional: the saved results of that part), `command`: how to regenerate.
+// Returns the flags (failures and targets missed).
+export function writeReport({ parts, doc, chartDir, command, quick }) {
+  mkdirSync(chartDir, { recursive: true });
+  mkdirSync(path.dirname(doc), { recursive: true });
+  const charts = new Map();
+  charts.link = (name) => path.relative(path.dirname(doc), path.join(chartDir, name)).split(path.sep).join('/');
+  const lines = [], flags = [];
+  const print = (line = '') => lines.push(line);
+  const anyMeta = parts.rd?.meta || parts.speed?.meta || parts.scaling?.meta;
+  print('# Benchmarks');
+  print();
+  print(quick ? 'The quick mode of the harness (the test suite runs it): one file, two segmorph rates, one setting per ' +
+                'anchor, tiny scaling points. Correctness only: these figures mean nothing about speed.'
+              : 'segmorph against the tools its users would otherwise pick, on the same files, in one run: raw float morph ' +
+                'targets, gltfpack and glTF-Transform; then speed, memory, and how the codec scales. Every figure on this ' +
+                'page, and every chart, is written by the harness; nothing is edited by hand.');
+  print();
+  print('## How to regenerate');
+  print();
+  print('From the repository root, after `bash .ci/setup` (Debian packages; `npm ci --prefix tests/js` installs gltfpack ' +
+        '1.3.0, @gltf-transform/cli 4.5.1, three and the Khronos validator at the versions tests/js/package-lock.json ' +
+        'pins) and `.ci/build release`:');
+  print();
+  print('```sh');
+  print(command);
+  print('```');
+  print();
+  print('It writes every file and log under `out/bench/` (`results/*.json` hold the figures), then this page and ' +
+        '`docs/bench/*.svg`. `--parts rd,speed,scaling` runs some parts only (the page is rebuilt from the saved results ' +
+        'of all three); `--quick` is the test suite\'s small run (ctest `bench_quick`). Exit status 1 when a step fails ' +
+        'or a segmorph file misses its error bound.');
+  print();
+  if (anyMeta) {
+    print('## Where it ran');
+    print();
+    print(`- Machine: ${anyMeta.machine}. Other work shared the 2 cores while this ran (the load averages below), so ` +
+          'times are upper bounds; CPU times are steadier than wall times.');
+    print(`- segmorph revision ${anyMeta.revision}; ${anyMeta.versions.join('; ')}.`);
+    for (const [name, key] of [['Rate and distortion', 'rd'], ['Speed and memory', 'speed'], ['Scaling', 'scaling']])
+      if (parts[key]) print(metaLine(name, parts[key].meta));
+    print();
+  }
+  summary(parts, lines);
+  if (parts.rd) rateDistortion(parts.rd, charts, lines, flags);
+  const shapes = new Map((parts.rd?.files ?? []).map((f) => [f.label, f.shape]));
+  if (parts.speed) speedAndMemory(parts.speed, shapes, charts, lines, flags);
+  if (parts.scaling) scalingPart(parts.scaling, charts, lines, flags);
+  print('## Flags');
+  print();
+  print('Failed steps and segmorph files above their error bound (the harness exits with 1 when there is one).');
+  print();
+  if (flags.length === 0) print('None.');
+  for (const flag of flags) print(`- ${flag}`);
+  print();
+  for (const [name, svg] of charts) writeFileSync(path.join(chartDir, name), svg);
+  writeFileSync(doc, lines.join('\n'));
+  return { flags, charts: [...charts.keys()] };
+}
