@@ -2,7 +2,7 @@
 // built in memory: a torus of about V vertices (a regular grid of rings, one connected closed surface) whose
 // ring and tube radii swell in travelling waves while it bends, twists and drifts: smooth, non-rigid motion
 // that looks the same at every resolution, so only V and F change between runs.
-//   codec_scaling --vertices V --frames F [--error E]
+//   codec_scaling --vertices V --frames F [--error E | --bpvf R]
 // One run measures one (V, F) point and prints one JSON object on stdout:
 //   vertices, frames, triangles, input_mb (the frames, V × F × 3 floats), clusters, stream_bytes, bpvf (the
 //   stream's), kg_percent (decoded against the input), milliseconds {generate, draco, segmentation, motion,
@@ -124,14 +124,16 @@ int main(int argc, char** argv) {
     else if (i + 1 < argc && arg == "--frames")
       frames = size_t(std::atol(argv[++i]));
     else if (i + 1 < argc && arg == "--error")
-      settings.target = std::atof(argv[++i]);
+      settings.mode = RateMode::error, settings.target = std::atof(argv[++i]);
+    else if (i + 1 < argc && arg == "--bpvf")
+      settings.mode = RateMode::bpvf, settings.target = std::atof(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: codec_scaling --vertices V --frames F [--error E]\n");
+      std::fprintf(stderr, "usage: codec_scaling --vertices V --frames F [--error E | --bpvf R]\n");
       return 2;
     }
   }
   if (vertices < 9 || frames < 2 || !(settings.target > 0)) {
-    std::fprintf(stderr, "codec_scaling: needs --vertices 9 or more, --frames 2 or more and a positive --error\n");
+    std::fprintf(stderr, "codec_scaling: needs --vertices 9 or more, --frames 2 or more and a positive target\n");
     return 2;
   }
 

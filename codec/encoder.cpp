@@ -41,6 +41,12 @@ constexpr int kWeightBits = 8;
 constexpr double kMotionStepRatio = 0.5;
 // Other ratios tried with an error target (which one wins depends on the sequence: docs/codec.md).
 constexpr double kMotionStepRatioTrials[] = {0.25, 1.0};
+// Lossy steps (residual and motion translation) are at least 2^-kFinestStepBits of the base mesh's bounding-box
+// diagonal: finer than float positions resolve, they buy nothing, and they would make the quantized values
+// outgrow int32 (a --bpvf target far above what the frames need got there). Quantized motion coefficients are
+// clamped to ±kMaxMotionCoefficient, so that frame-to-frame differences fit in int32 too.
+constexpr int kFinestStepBits = 24;
+constexpr double kMaxMotionCoefficient = double(1 << 29);
 
 Status check_input(const std::vector<FrameSequence>& clips, const std::vector<float>& base) {
   if (clips.empty()) return Status(StatusCode::invalid_argument, "no clips to encode");
@@ -60,6 +66,12 @@ Status check_input(const std::vector<FrameSequence>& clips, const std::vector<fl
   return Status::Ok();
 }
 
+// A motion coefficient in quantizer steps, rounded and clamped (a fit that is not finite quantizes to 0).
+int32_t quantized_coefficient(double steps) {
+  if (!std::isfinite(steps)) return 0;
+  return int32_t(std::llround(std::clamp(steps, -kMaxMotionCoefficient, kMaxMotionCoefficient)));
+}
+
 void quantize_motion(const AffineMotion& fitted, double linear_step, double translation_step, StreamContent& content) {
   content.linear_step = float(linear_step);
   content.translation_step = float(translation_step);
@@ -70,9 +82,8 @@ void quantize_motion(const AffineMotion& fitted, double linear_step, double tran
       const double* t = fitted.transform(f, k);
       int32_t* q = &content.motion[(f * fitted.cluster_count + k) * 12];
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c)
-          q[r * 3 + c] = int32_t(std::llround((t[r * 4 + c] - (r == c ? 1.0 : 0.0)) / linear));
-        q[9 + r] = int32_t(std::llround((t[r * 4 + 3] - fitted.centroid[k * 3 + size_t(r)]) / translation));
+        for (int c = 0; c < 3; ++c) q[r * 3 + c] = quantized_coefficient((t[r * 4 + c] - (r == c ? 1.0 : 0.0)) / linear);
+        q[9 + r] = quantized_coefficient((t[r * 4 + 3] - fitted.centroid[k * 3 + size_t(r)]) / translation);
       }
     }
 }
@@ -210,6 +221,9 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   double mean_step = std::sqrt(12.0 * std::max(report.e_pi_before_refinement, 1e-12)) *
                      bounding_box_diagonal(base.data(), vertex_count) * 0.1;
   if (settings.mode == RateMode::error) mean_step = expected_residual_step(clips, spread, settings.target);
+  const double finest_step =
+      std::max(bounding_box_diagonal(base.data(), vertex_count), 1e-30) * std::exp2(-kFinestStepBits);
+  mean_step = std::max(mean_step, finest_step);
 
   // The cost of a candidate segmentation for the automatic K, smaller is better: with an error target, the
   // estimated stream bits at the target distortion; with a rate target, the estimated log distortion at the
@@ -329,11 +343,13 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   auto extend = [&](const std::vector<double>(&candidates)[3]) {
     std::vector<double> steps[3];
     for (int axis = 0; axis < 3; ++axis)
-      for (double step : candidates[axis])
-        if (std::find(curves[axis].step.begin(), curves[axis].step.end(), double(float(step))) ==
-                curves[axis].step.end() &&
+      for (double candidate : candidates[axis]) {
+        const double step = std::max(candidate, finest_step);
+        const std::vector<double>& measured = curves[axis].step;
+        if (std::find(measured.begin(), measured.end(), double(float(step))) == measured.end() &&
             std::find(steps[axis].begin(), steps[axis].end(), step) == steps[axis].end())
           steps[axis].push_back(step);
+      }
     measure_subbands(content, traversal, predictions, trajectories.positions, multiplicity, steps, curves);
   };
   // Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1, ±2), after
@@ -364,6 +380,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   // cluster radius), and the predictions they give.
   auto prepare_motion = [&](double motion_step) {
     auto begin = Clock::now();
+    motion_step = std::max(motion_step, finest_step);
     quantize_motion_and_weights(fitted, settings.mode == RateMode::lossless ? 1e-6 : motion_step / radius,
                                 settings.mode == RateMode::lossless ? 1e-6 * radius : motion_step, base_welded,
                                 trajectories, clusters, adjacency, settings.blend_weights, content);

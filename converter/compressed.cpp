@@ -285,6 +285,7 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
         return Status(StatusCode::internal, what + ": the morph targets did not reach the error target");
       encoding = std::move(best);
     }
+    encoding.report.kg_percent = targets_kg_percent(reordered, node, encoding);  // of the animation, not the targets
     report.primitives.push_back(encoding.report);
     report.draco_bytes += encoding.draco_bytes.size();
     report.animation_bytes += encoding.stream.size();

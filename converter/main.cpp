@@ -46,7 +46,8 @@ const char* const kUsage =
     "  --fps N            sample every clip on a regular grid of N frames per second; by default the\n"
     "                     union of the clip's key times, or 30 fps where keys are denser than 60 per second\n"
     "  --error E          encode: KG error target in percent (default 0.15)\n"
-    "  --bpvf R           encode: target bits per vertex per frame of the whole output\n"
+    "  --bpvf R           encode: target bits per vertex per frame of the whole output, images and JSON\n"
+    "                     included (it encodes twice: the first encode measures what the rest of the file takes)\n"
     "  --lossless         encode: restore the sampled frames bit for bit\n"
     "  --clusters K       encode: number of motion clusters (default: automatic)\n"
     "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 30 (default: from\n"
@@ -260,16 +261,57 @@ struct Encoded {
   CompressReport report;
 };
 
-// Encodes a copy of file's model: the nodes `keep` marks keep their morph targets, the others are baked.
-Status encode_model(const SampledFile& file, const std::vector<bool>& keep, const Options& options, Encoded& out) {
+// Bits per vertex per frame are counted over Σ V × F of the sampled primitives and clips.
+double vertex_frames(const std::vector<SampledNode>& sampled) {
+  double total = 0;
+  for (const SampledNode& node : sampled)
+    for (const SampledPrimitive& primitive : node.primitives)
+      for (const FrameSequence& clip : primitive.clips) total += double(clip.vertex_count) * double(clip.frame_count);
+  return total;
+}
+
+// Encodes a copy of file's model with `codec`: the nodes `keep` marks keep their morph targets, the others are baked.
+Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep, const CodecSettings& codec,
+                         const Options& options, Encoded& out) {
   out.model = file.model;
   out.report = CompressReport();
   std::vector<SampledNode> kept, baked;
   for (size_t i = 0; i < file.sampled.size(); ++i) (keep[i] ? kept : baked).push_back(file.sampled[i]);
   const auto report_progress = [&](const std::string& message) { progress(options, message); };
-  SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, options.codec, options.draco, out.report, report_progress));
+  SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, codec, options.draco, out.report, report_progress));
   SEGMORPH_RETURN_IF_ERROR(bake_model(out.model, file.scene, baked));
-  return compress_model(out.model, baked, options.codec, options.draco, out.report, report_progress);
+  return compress_model(out.model, baked, codec, options.draco, out.report, report_progress);
+}
+
+// encode_model_once, and with --bpvf a second time: the rate is of the whole file, and the codec budgets only its
+// streams and base meshes, so the rest (JSON, images, other meshes and animations, kept weights), measured on the
+// first encode, comes off the codec's target.
+Status encode_model(const SampledFile& file, const std::vector<bool>& keep, const Options& options, Encoded& out) {
+  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, options.codec, options, out));
+  if (options.codec.mode != RateMode::bpvf) return Status::Ok();
+  const size_t coded = out.report.draco_bytes + out.report.animation_bytes, whole = glb_size(out.model);
+  const double rest = 8.0 * double(whole > coded ? whole - coded : 0) / vertex_frames(file.sampled);
+  char figures[200];
+  std::snprintf(figures, sizeof(figures), "%.3f bpvf, of which %.3f outside the animation streams and base meshes",
+                8.0 * double(whole) / vertex_frames(file.sampled), rest);
+  if (rest >= options.codec.target) {
+    char target[32];
+    std::snprintf(target, sizeof(target), "%g", options.codec.target);
+    return Status(StatusCode::invalid_argument, std::string("--bpvf ") + target +
+                                                    " is below what the rest of the file takes alone: the first "
+                                                    "encode came to " + figures);
+  }
+  progress(options, std::string("first encode: ") + figures + "; encoding again for the whole file's rate");
+  CodecSettings codec = options.codec;
+  codec.target -= rest;
+  return encode_model_once(file, keep, codec, options, out);
+}
+
+// The worst KG error (%) the encoder reports over the encoded primitives.
+double worst_kg(const CompressReport& report) {
+  double worst = 0;
+  for (const EncodeReport& primitive : report.primitives) worst = std::max(worst, primitive.kg_percent);
+  return worst;
 }
 
 int run_encode(const Options& options) {
@@ -278,7 +320,8 @@ int run_encode(const Options& options) {
   Status status = load_and_sample(path, options, file);
   if (!status.ok()) return fail(path, status);
   // Morph-target meshes that keep their targets are compressed where they are; the others are baked first. With
-  // --targets auto, a file where some mesh could keep them is encoded both ways and the smaller file kept.
+  // --targets auto, a file where some mesh could keep them is encoded both ways; the smaller file is kept (with
+  // --bpvf, where both come to the target's size, the one with the smaller worst error).
   std::vector<bool> keep(file.sampled.size());
   bool any_kept = false;
   for (size_t i = 0; i < file.sampled.size(); ++i)
@@ -287,13 +330,17 @@ int run_encode(const Options& options) {
   status = encode_model(file, keep, options, encoded);
   if (status.ok() && any_kept && options.targets == Options::Targets::automatic) {
     Encoded baked;
-    progress(options, "encoding again with the morph targets baked, to keep the smaller file");
+    progress(options, "encoding again with the morph targets baked, to compare");
     status = encode_model(file, std::vector<bool>(keep.size(), false), options, baked);
     if (status.ok()) {
       const size_t kept_size = glb_size(encoded.model), baked_size = glb_size(baked.model);
-      progress(options, "morph targets kept: " + std::to_string(kept_size) + " bytes; baked: " +
-                            std::to_string(baked_size) + " bytes");
-      if (baked_size < kept_size) encoded = std::move(baked);
+      const double kept_kg = worst_kg(encoded.report), baked_kg = worst_kg(baked.report);
+      char line[160];
+      std::snprintf(line, sizeof(line), "morph targets kept: %zu bytes, KG %.4f %%; baked: %zu bytes, KG %.4f %%",
+                    kept_size, kept_kg, baked_size, baked_kg);
+      progress(options, line);
+      if (options.codec.mode == RateMode::bpvf ? baked_kg < kept_kg : baked_size < kept_size)
+        encoded = std::move(baked);
     }
   }
   if (!status.ok()) return fail(path, status);
@@ -305,10 +352,8 @@ int run_encode(const Options& options) {
 
   tinygltf::Model written;
   const size_t bytes = load_gltf(options.output, written).ok() ? file_bytes(options.output, written) : 0;
-  double vertex_frames = 0, clusters = 0, e_pi = 0, e_pi_before = 0, ms[5] = {0, 0, 0, 0, 0};
-  for (const SampledNode& node : file.sampled)
-    for (const SampledPrimitive& primitive : node.primitives)
-      for (const FrameSequence& clip : primitive.clips) vertex_frames += double(clip.vertex_count * clip.frame_count);
+  const double vertex_frames = segmorph::vertex_frames(file.sampled);
+  double clusters = 0, e_pi = 0, e_pi_before = 0, ms[5] = {0, 0, 0, 0, 0};
   for (const EncodeReport& r : report.primitives) {
     clusters += double(r.clusters);
     e_pi = std::max(e_pi, r.e_pi);

@@ -408,6 +408,32 @@ TEST(Cli, KeptMorphTargetsThatDisagreeAreRefused) {
   expect_clean_failure(encoded, "exclude each other", "decode");
 }
 
+// --bpvf is the rate of the whole file: the Fox's texture, JSON and frame times (1.25 bpvf) come off the codec's
+// budget. A target below them alone is refused; one far above what the frames need gives the finest stream (it
+// made the steps shrink until quantized motion left int32, and encode failed its own decoding check).
+TEST(Cli, BpvfTargetIsTheWholeFile) {
+  const std::string directory = output_directory("bpvf");
+  const std::string input = sample("Fox/Fox.glb"), output = directory + "/fox.glb";
+  Result result = run("encode -q " + input + " -o " + output + " --bpvf 3");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  result = run("verify -q " + input + " " + output + " --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NEAR(json_number(result.out, "bpvf"), 3.0, 0.15);
+
+  fs::remove(output);
+  result = run("encode -q " + input + " -o " + output + " --bpvf 1");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("below what the rest of the file takes"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(output));
+
+  result = run("encode -q " + input + " -o " + output + " --bpvf 200");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  result = run("verify -q " + input + " " + output + " --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_LT(json_number(result.out, "kg_percent"), 0.001);
+  EXPECT_LT(json_number(result.out, "bpvf"), 200);
+}
+
 TEST(Cli, CorruptedEncodedFilesFailCleanlyOrDecode) {
   const std::string directory = output_directory("corrupt_encoded");
   ASSERT_EQ(run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory + "/encoded.glb").exit_code,
