@@ -16,7 +16,7 @@ const ms = (x) => (x === null || x === undefined ? '—' : x >= 100 ? x.toFixed(
 const seconds = (x) => (x / 1000).toFixed(x >= 10000 ? 1 : 2);
 const slug = (label) => path.basename(label).replace(/\.(glb|gltf)$/i, '').toLowerCase().replace(/[^a-z0-9]+/g, '-');
 const shapeText = (shape) => (shape ? `${shape.vertices} × ${shape.frames}` : '—');
-const ok = (runs) => runs.filter((r) => !r.failed);
+const ok = (runs) => runs.filter((r) => !r.failed && !r.unreachable);
 
 function metaLine(name, meta) {
   if (!meta) return null;
@@ -108,6 +108,7 @@ function rateDistortion(rd, charts, lines, flags) {
     print('|---|---|---|---|---|---|---|---|---|');
     for (const r of file.runs) {
       if (r.failed) { print(`| ${r.family} | ${r.setting} | failed: ${r.failed} | | | | | | |`); continue; }
+      if (r.unreachable) { print(`| ${r.family} | ${r.setting} | refused: ${r.unreachable} | | | | | | |`); continue; }
       print(`| ${r.family} | ${r.setting} | ${r.bytes} | ${fixed(r.bpvf)} | ${kgText(r.kg)} | ${r.rmse.toExponential(2)} | ` +
             `${r.max.toExponential(2)} | ${ms(r.wall_ms)} ms | ${mb(r.max_rss_kb)} MB |`);
     }
@@ -116,6 +117,7 @@ function rateDistortion(rd, charts, lines, flags) {
     print();
     for (const r of file.runs) {
       if (r.failed) flags.push(`${file.label}, ${r.family} ${r.setting}: ${r.failed}`);
+      else if (r.unreachable) continue;
       else if (r.bound !== null && r.bound !== undefined && r.kg > r.bound)
         flags.push(`${file.label}, segmorph ${r.setting}: KG ${kgText(r.kg)} is above the requested ${r.bound} %`);
     }
@@ -134,13 +136,15 @@ function bpvfTargets(rd, lines) {
   print();
   print('Per target: the whole file\'s bpvf, then in brackets the part the animation streams and the Draco base ' +
         'meshes take (from encode --json) and the part the rest of the file takes (images, JSON, and the meshes, skins ' +
-        'and node animation segmorph leaves as they are). A whole file more than 10 % off its target is in bold.');
+        'and node animation segmorph leaves as they are). A whole file more than 10 % off its target is in bold. ' +
+        '"below the rest": segmorph refuses a target below what the rest of the file takes alone.');
   print();
   print(`| file | ${targets.map((t) => `--bpvf ${t}`).join(' | ')} |`);
   print(`|---|${targets.map(() => '---|').join('')}`);
   for (const file of rd.files) {
     const cells = targets.map((target) => {
       const r = file.runs.find((x) => x.target_bpvf === target);
+      if (r?.unreachable) return 'below the rest';
       if (!r || r.failed || !r.encode) return 'failed';
       const coded = (8 * (r.encode.animation_bytes + r.encode.draco_bytes)) / file.shape.vertex_frames;
       const whole = Math.abs(r.bpvf - target) > 0.1 * target ? `**${fixed(r.bpvf)}**` : fixed(r.bpvf);
