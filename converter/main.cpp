@@ -34,7 +34,8 @@ const char* const kUsage =
     "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
     "      (see --targets). Default target: --error 0.15 (KG error in %).\n"
     "  decode IN -o OUT\n"
-    "      Restore standard glTF morph targets (the form bake writes) from an encoded file.\n"
+    "      Restore standard glTF from an encoded file: morph targets in the form bake writes, or a mesh's\n"
+    "      kept morph targets, played by its own weights animation.\n"
     "  verify ORIGINAL COMPRESSED [--json]\n"
     "      Compare the animation of two files (either may be encoded, baked, original or written by another\n"
     "      tool: primitives and vertices are paired by trajectory, COMPRESSED is sampled at ORIGINAL's frame\n"
@@ -54,8 +55,9 @@ const char* const kUsage =
     "                     the error target, at least 12; 14 with --bpvf or --lossless)\n"
     "  --targets MODE     encode: what a morph-target mesh (unskinned, one node) stores. keep: its targets,\n"
     "                     compressed, played by its own weights animation; bake: its sampled frames, like a\n"
-    "                     skinned mesh. auto (default): keep when it has at most half as many targets as\n"
-    "                     frames, and never with --lossless (kept targets are lossy)\n"
+    "                     skinned mesh. auto (default): where a mesh has at most half as many targets as\n"
+    "                     frames, encode both ways and keep the smaller file (with --bpvf, the one with the\n"
+    "                     smaller error); never keep them with --lossless (kept targets are lossy)\n"
     "  --json             info, encode, verify: print one JSON object instead of text\n"
     "  -q, --quiet        no progress messages on stderr\n"
     "  -h, --help         this help\n"
@@ -261,6 +263,9 @@ struct Encoded {
   CompressReport report;
 };
 
+// A --bpvf result within this factor of its target meets it (the codec aims a little below).
+constexpr double kBpvfTolerance = 1.05;
+
 // Bits per vertex per frame are counted over Σ V × F of the sampled primitives and clips.
 double vertex_frames(const std::vector<SampledNode>& sampled) {
   double total = 0;
@@ -304,7 +309,16 @@ Status encode_model(const SampledFile& file, const std::vector<bool>& keep, cons
   progress(options, std::string("first encode: ") + figures + "; encoding again for the whole file's rate");
   CodecSettings codec = options.codec;
   codec.target -= rest;
-  return encode_model_once(file, keep, codec, options, out);
+  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, codec, options, out));
+  const double reached = 8.0 * double(glb_size(out.model)) / vertex_frames(file.sampled);
+  if (reached > kBpvfTolerance * options.codec.target) {
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "warning: --bpvf %g is out of reach for this file: it comes to %.3f bpvf",
+                  options.codec.target, reached);
+    progress(options, line);
+  }
+  return Status::Ok();
 }
 
 // The worst KG error (%) the encoder reports over the encoded primitives.
@@ -328,19 +342,29 @@ int run_encode(const Options& options) {
     any_kept |= keep[i] = keeps_targets(file.model, *file.sampled[i].node, file.sampled[i], options);
   Encoded encoded;
   status = encode_model(file, keep, options, encoded);
-  if (status.ok() && any_kept && options.targets == Options::Targets::automatic) {
+  if (any_kept && options.targets == Options::Targets::automatic) {
+    // Either variant may be refused (a --bpvf target below what its rest takes); the other then stands alone.
     Encoded baked;
     progress(options, "encoding again with the morph targets baked, to compare");
-    status = encode_model(file, std::vector<bool>(keep.size(), false), options, baked);
-    if (status.ok()) {
+    const Status baked_status = encode_model(file, std::vector<bool>(keep.size(), false), options, baked);
+    if (!status.ok() && baked_status.ok()) {
+      progress(options, "keeping the morph targets was refused (" + status.message() + "); the baked file stands");
+      encoded = std::move(baked), status = baked_status;
+    } else if (status.ok() && baked_status.ok()) {
       const size_t kept_size = glb_size(encoded.model), baked_size = glb_size(baked.model);
       const double kept_kg = worst_kg(encoded.report), baked_kg = worst_kg(baked.report);
       char line[160];
       std::snprintf(line, sizeof(line), "morph targets kept: %zu bytes, KG %.4f %%; baked: %zu bytes, KG %.4f %%",
                     kept_size, kept_kg, baked_size, baked_kg);
       progress(options, line);
-      if (options.codec.mode == RateMode::bpvf ? baked_kg < kept_kg : baked_size < kept_size)
-        encoded = std::move(baked);
+      // With --bpvf: the smaller error among the files within the target, else the smaller file.
+      const double budget = kBpvfTolerance * options.codec.target * vertex_frames(file.sampled) / 8;
+      const bool kept_fits = double(kept_size) <= budget, baked_fits = double(baked_size) <= budget;
+      const bool take_baked = options.codec.mode != RateMode::bpvf ? baked_size < kept_size
+                              : kept_fits != baked_fits                 ? baked_fits
+                              : kept_fits                               ? baked_kg < kept_kg
+                                                                        : baked_size < kept_size;
+      if (take_baked) encoded = std::move(baked);
     }
   }
   if (!status.ok()) return fail(path, status);

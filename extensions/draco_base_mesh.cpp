@@ -106,6 +106,12 @@ Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<s
   return Status::Ok();
 }
 
+// At most kMaxCandidates originals within a step are considered for each decoded vertex (see
+// match_decoded_vertices), the cheapest of at most kMaxScanned found there: where thousands of originals share a
+// step (a dense part, a part collapsed to a point), nearness cannot choose among them anyway, and scanning them all
+// for every vertex would take time quadratic in their number.
+constexpr size_t kMaxCandidates = 16, kMaxScanned = 1024;
+
 Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings,
                               std::vector<uint32_t>& source) {
   const std::vector<float>& positions = original.attributes[0].values;
@@ -162,11 +168,17 @@ Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded,
       for (int64_t dy = -1; dy <= 1; ++dy)
         for (int64_t dz = -1; dz <= 1; ++dz) {
           const auto range = grid.equal_range(key(cell(q, 0) + dx, cell(q, 1) + dy, cell(q, 2) + dz));
-          for (auto it = range.first; it != range.second; ++it)
+          for (auto it = range.first; it != range.second && found.size() < kMaxScanned; ++it)
             if (cost(p, it->second) < INFINITY) found.push_back(it->second);
         }
     std::sort(found.begin(), found.end());
     found.erase(std::unique(found.begin(), found.end()), found.end());
+    // Thousands of originals can lie within one step (a dense part, a part collapsed to a point): the cheapest
+    // few bound the matching's work (equally cheap ones by index).
+    if (found.size() > kMaxCandidates) {
+      std::stable_sort(found.begin(), found.end(), [&](uint32_t a, uint32_t b) { return cost(p, a) < cost(p, b); });
+      found.resize(kMaxCandidates);
+    }
     return found;
   };
 
@@ -199,12 +211,21 @@ Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded,
     const uint32_t* corner = &decoded.triangles[size_t(d) * 3];
     Fit best;
     double second = INFINITY;
-    for (uint32_t v0 : corner_candidates[corner[0]])
-      for (uint32_t t : incident[v0])
+    // The original triangles around the candidates of one corner: the corner with the fewest such triangles.
+    int pivot = 0;
+    size_t fewest = SIZE_MAX;
+    for (int k = 0; k < 3; ++k) {
+      size_t around = 0;
+      for (uint32_t candidate : corner_candidates[corner[k]]) around += incident[candidate].size();
+      if (around < fewest) fewest = around, pivot = k;
+    }
+    for (uint32_t candidate : corner_candidates[corner[pivot]])
+      for (uint32_t t : incident[candidate])
         for (int c = 0; c < 3; ++c) {
           const uint32_t* o = &original.triangles[size_t(t) * 3];
-          if (o[c] != v0) continue;
-          const uint32_t v[3] = {v0, o[(c + 1) % 3], o[(c + 2) % 3]};
+          if (o[c] != candidate) continue;
+          uint32_t v[3];  // the original of each corner under this match
+          for (int j = 0; j < 3; ++j) v[(pivot + j) % 3] = o[(c + j) % 3];
           double score = taken[t] ? kTaken : 0.0;
           for (int k = 0; k < 3; ++k) {
             score += cost(corner[k], v[k]);

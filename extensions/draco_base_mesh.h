@@ -50,9 +50,10 @@ Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<s
 
 // For each vertex Draco decoded, the vertex of `original` it came from. Draco keeps the triangles: each decoded
 // triangle is matched to the original triangle whose corners are nearest (within a quantization step, other
-// attributes alike), and a vertex comes from the original its triangles name most often; a vertex in no matched
-// triangle comes from the nearest original (one no other decoded vertex came from, when there is one). Fails when a
-// decoded vertex has no original within the step.
+// attributes alike; among the 16 nearest originals of one of its corners), surest matches first, and each vertex
+// comes from the original of the first triangle matched around it; a vertex in no matched triangle comes from the
+// nearest original (one no other decoded vertex came from, when there is one). Fails when a decoded vertex has no
+// original within the step.
 Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings,
                               std::vector<uint32_t>& source);
 

@@ -372,6 +372,12 @@ TEST(Cli, KeptMorphTargetsEncodeDecodeAndVerify) {
     ASSERT_EQ(result.exit_code, 0) << result.err;
     EXPECT_EQ(read_text(directory + "/cube.glb").find("morphTargets"), std::string::npos) << mode;
   }
+  // With --bpvf 8 the kept variant is refused (its weights track leaves too little of the budget): auto goes on
+  // with the baked one rather than failing.
+  const Result rate = run("encode -q " + input + " -o " + directory + "/rate.glb --bpvf 8");
+  ASSERT_EQ(rate.exit_code, 0) << rate.err;
+  EXPECT_EQ(read_text(directory + "/rate.glb").find("morphTargets"), std::string::npos);
+  EXPECT_EQ(run("encode -q " + input + " -o " + directory + "/rate.glb --bpvf 8 --targets keep").exit_code, 1);
   // Lossless encodes bake (kept targets are lossy). The stream restores the sampled frames bit for bit; verify
   // plays them in the morph-target form, base + delta in float, which is within an ulp of each frame (spec/README.md).
   Result lossless = run("encode -q " + input + " -o " + directory + "/lossless.glb --lossless");
@@ -425,6 +431,11 @@ TEST(Cli, BpvfTargetIsTheWholeFile) {
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_NE(result.err.find("below what the rest of the file takes"), std::string::npos) << result.err;
   EXPECT_FALSE(fs::exists(output));
+
+  // Above the rest but below what the base mesh and the motion need: encoded, with a warning.
+  result = run("encode " + input + " -o " + output + " --bpvf 1.3");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("warning: --bpvf 1.3 is out of reach"), std::string::npos) << result.err;
 
   result = run("encode -q " + input + " -o " + output + " --bpvf 200");
   ASSERT_EQ(result.exit_code, 0) << result.err;

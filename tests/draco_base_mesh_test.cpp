@@ -199,6 +199,51 @@ TEST(DracoBaseMesh, SequencesDecodedTrianglesAreOriginalTriangles) {
   }
 }
 
+// Shapes that made the triangle matching quadratic: a fan (one vertex in 30000 triangles) and a grid whose half is
+// collapsed to one point (5000 coincident vertices). Each decoded triangle must still come from an original
+// triangle, up to vertices at the same position.
+TEST(DracoBaseMesh, FansAndCollapsedPartsMatch) {
+  BaseMesh fan, collapsed;
+  fan.attributes.push_back({"POSITION", 3, {0, 0, 0}});
+  const uint32_t rim = 30000;
+  for (uint32_t i = 0; i < rim; ++i) {
+    const double angle = 6.283185307179586 * i / rim;
+    fan.attributes[0].values.insert(fan.attributes[0].values.end(), {float(std::cos(angle)), float(std::sin(angle)), 0});
+    fan.triangles.insert(fan.triangles.end(), {0u, 1 + i, 1 + (i + 1) % rim});
+  }
+  fan.vertex_count = rim + 1;
+  const uint32_t n = 100;
+  collapsed.attributes.push_back({"POSITION", 3, {}});
+  for (uint32_t y = 0; y < n; ++y)
+    for (uint32_t x = 0; x < n; ++x)
+      collapsed.attributes[0].values.insert(collapsed.attributes[0].values.end(),
+                                            {y < n / 2 ? 0.0f : float(x), y < n / 2 ? 0.0f : float(y), 0.0f});
+  for (uint32_t y = 0; y + 1 < n; ++y)
+    for (uint32_t x = 0; x + 1 < n; ++x) {
+      const uint32_t a = y * n + x;
+      collapsed.triangles.insert(collapsed.triangles.end(), {a, a + 1, a + n + 1, a, a + n + 1, a + n});
+    }
+  collapsed.vertex_count = n * n;
+  for (const BaseMesh* mesh : {&fan, &collapsed}) {
+    BaseMesh decoded;
+    std::vector<uint32_t> source;
+    ASSERT_TRUE(round_trip(*mesh, DracoSettings(), decoded, source));
+    std::set<std::array<float, 9>> original;
+    auto corners = [](const BaseMesh& m, const uint32_t* t, const std::vector<uint32_t>* map) {
+      std::array<std::array<float, 3>, 3> p;
+      for (int k = 0; k < 3; ++k)
+        for (int c = 0; c < 3; ++c) p[size_t(k)][size_t(c)] = m.attributes[0].values[size_t(map ? (*map)[t[k]] : t[k]) * 3 + size_t(c)];
+      std::sort(p.begin(), p.end());
+      return std::array<float, 9>{p[0][0], p[0][1], p[0][2], p[1][0], p[1][1], p[1][2], p[2][0], p[2][1], p[2][2]};
+    };
+    for (size_t t = 0; t < mesh->triangles.size(); t += 3) original.insert(corners(*mesh, &mesh->triangles[t], nullptr));
+    size_t foreign = 0;
+    for (size_t t = 0; t < decoded.triangles.size(); t += 3)
+      foreign += original.count(corners(*mesh, &decoded.triangles[t], &source)) == 0;
+    EXPECT_EQ(foreign, 0u) << (mesh == &fan ? "fan" : "collapsed grid");
+  }
+}
+
 TEST(DracoBaseMesh, DecodingTwiceGivesTheSameFloats) {
   // The animation stream is encoded against the decoded base: decoding must be deterministic.
   const BaseMesh mesh = sphere_mesh();
