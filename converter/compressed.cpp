@@ -176,18 +176,6 @@ tinygltf::Primitive encoded_primitive(const tinygltf::Primitive& original, const
   return out;
 }
 
-// The positions glTF renders for morph target displacements `deltas` (T × V × 3) over `base` at `weights`
-// (T per frame), as sample_node computes them.
-void morph(const std::vector<float>& base, const std::vector<std::vector<float>>& deltas, const double* weights,
-           float* out) {
-  std::vector<double> sum(base.begin(), base.end());
-  for (size_t t = 0; t < deltas.size(); ++t) {
-    if (weights[t] == 0 || deltas[t].empty()) continue;
-    for (size_t i = 0; i < sum.size(); ++i) sum[i] += weights[t] * deltas[t][i];
-  }
-  for (size_t i = 0; i < sum.size(); ++i) out[i] = float(sum[i]);
-}
-
 // Morph target displacements from decoded target frames: frame − base, as the decoder writes them.
 std::vector<std::vector<float>> target_displacements(const FrameSequence& frames, const std::vector<float>& base) {
   std::vector<std::vector<float>> deltas(frames.frame_count, std::vector<float>(base.size()));
@@ -203,10 +191,14 @@ double targets_kg_percent(const std::vector<FrameSequence>& reordered, const Sam
   const std::vector<float>& base = encoding.decoded.attributes[0].values;
   const std::vector<std::vector<float>> deltas = target_displacements(encoding.reconstruction[0], base);
   ErrorAccumulator error;
+  std::vector<double> morphed;
   for (size_t c = 0; c < reordered.size(); ++c) {
     FrameSequence played = reordered[c];
-    for (size_t f = 0; f < played.frame_count; ++f)
-      morph(base, deltas, node.clip_weights[c].data() + f * deltas.size(), played.frame(f));
+    for (size_t f = 0; f < played.frame_count; ++f) {
+      // As sample_node plays them, which is how verify will measure the file.
+      morph_positions(base, deltas, node.clip_weights[c].data() + f * deltas.size(), morphed);
+      std::copy(morphed.begin(), morphed.end(), played.frame(f));
+    }
     error.add(reordered[c], played);
   }
   return error.result().kg_percent;
@@ -309,27 +301,38 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
   return Status::Ok();
 }
 
-// Decodes the stream of a primitive that keeps its morph targets and fills the targets in: POSITION with the
-// decoded displacements, NORMAL (where the target has it) derived as bake derives frame normals.
-Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
-                       const std::string& what) {
-  SampledPrimitive rest;
-  SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, rest));
+// Decodes the stream of compressed `primitive` (its extension object parsed into `compressed`) against its base
+// mesh: `out` gets the rest attributes and the decoded clips, each with the primitive's triangles; `bytes` the
+// stream's length.
+Status decode_primitive_stream(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                               const CompressedPrimitive& compressed, const std::string& what, SampledPrimitive& out,
+                               size_t& bytes) {
+  SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, out));
   std::vector<uint32_t> triangles;
   if (primitive.indices < 0) return Status(StatusCode::bad_data, what + ": a compressed primitive needs indices");
   SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", triangles));
-  const size_t vertex_count = rest.rest_positions.size() / 3;
   for (uint32_t index : triangles)
-    if (index >= vertex_count) return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
+    if (index >= out.rest_positions.size() / 3)
+      return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
   const unsigned char* data = nullptr;
-  size_t size = 0;
-  SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, compressed.buffer_view, what + " " + kExtensionName, &data, &size));
-  std::vector<FrameSequence> clips;
-  const Status status = decode_animation(data, size, rest.rest_positions, triangles, clips);
+  SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, compressed.buffer_view, what + " " + kExtensionName, &data, &bytes));
+  const Status status = decode_animation(data, bytes, out.rest_positions, triangles, out.clips);
   if (!status.ok()) return Status(status.code(), what + ": " + status.message());
+  for (FrameSequence& clip : out.clips) clip.triangles = triangles;
+  return Status::Ok();
+}
+
+// Decodes the stream of a primitive that keeps its morph targets and fills the targets in: POSITION with the
+// decoded displacements, NORMAL (where the target has it) derived as bake derives frame normals. `bytes`: the
+// stream's length.
+Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
+                       const std::string& what, size_t& bytes) {
+  SampledPrimitive rest;
+  SEGMORPH_RETURN_IF_ERROR(decode_primitive_stream(model, primitive, compressed, what, rest, bytes));
+  const std::vector<FrameSequence>& clips = rest.clips;
+  const size_t vertex_count = rest.rest_positions.size() / 3;
   if (clips.size() != 1 || clips[0].frame_count != primitive.targets.size())
     return Status(StatusCode::bad_data, what + ": the stream's frames disagree with the morph target count");
-  clips[0].triangles = triangles;
   for (const std::map<std::string, int>& target : primitive.targets)
     for (const auto& [semantic, accessor] : target)
       if (semantic != "POSITION" && semantic != "NORMAL")
@@ -604,10 +607,10 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
         return Status(StatusCode::bad_data, what + ": some primitives keep morph targets and some play clips");
     if (targets) {
       for (size_t p = 0; p < primitives.size(); ++p) {
-        const Status status = restore_targets(model, model.meshes[m].primitives[p], primitives[p],
-                                              what + " primitive " + std::to_string(p));
-        if (!status.ok()) return status;
-        found.animation_bytes += model.bufferViews[size_t(primitives[p].buffer_view)].byteLength;
+        size_t bytes = 0;
+        SEGMORPH_RETURN_IF_ERROR(restore_targets(model, model.meshes[m].primitives[p], primitives[p],
+                                                 what + " primitive " + std::to_string(p), bytes));
+        found.animation_bytes += bytes;
         ++found.primitives;
       }
       continue;
@@ -651,22 +654,10 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
       const std::string what = "mesh " + std::to_string(animated[i].mesh) + " primitive " + std::to_string(p);
       SampledPrimitive out;
       out.primitive = int(p);
-      SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, out));
-      std::vector<uint32_t> triangles;
-      if (primitive.indices < 0) return Status(StatusCode::bad_data, what + ": a compressed primitive needs indices");
-      SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", triangles));
-      for (uint32_t index : triangles)
-        if (index >= out.rest_positions.size() / 3)
-          return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
-
-      const unsigned char* data = nullptr;
-      size_t size = 0;
-      SEGMORPH_RETURN_IF_ERROR(
-          buffer_view_bytes(model, streams[i][p].buffer_view, what + " " + kExtensionName, &data, &size));
-      found.animation_bytes += size;
+      size_t bytes = 0;
+      SEGMORPH_RETURN_IF_ERROR(decode_primitive_stream(model, primitive, streams[i][p], what, out, bytes));
+      found.animation_bytes += bytes;
       ++found.primitives;
-      const Status status = decode_animation(data, size, out.rest_positions, triangles, out.clips);
-      if (!status.ok()) return Status(status.code(), what + ": " + status.message());
       if (out.clips.size() != streams[i][p].clips.size())
         return Status(StatusCode::bad_data, what + ": the stream's clip count disagrees with the extension's");
       for (size_t c = 0; c < out.clips.size(); ++c) {
@@ -682,7 +673,6 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
         for (size_t f = 1; f < clip.times.size(); ++f)
           if (!(clip.times[f] > clip.times[f - 1]))
             return Status(StatusCode::bad_data, what + ": clip times must increase");
-        clip.triangles = triangles;
       }
       node.primitives.push_back(std::move(out));
       primitive.extensions.erase(kExtensionName);

@@ -294,11 +294,12 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
 Status encode_model(const SampledFile& file, const std::vector<bool>& keep, const Options& options, Encoded& out) {
   SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, options.codec, options, out));
   if (options.codec.mode != RateMode::bpvf) return Status::Ok();
+  const double frames = vertex_frames(file.sampled);
   const size_t coded = out.report.draco_bytes + out.report.animation_bytes, whole = glb_size(out.model);
-  const double rest = 8.0 * double(whole > coded ? whole - coded : 0) / vertex_frames(file.sampled);
+  const double rest = 8.0 * double(whole > coded ? whole - coded : 0) / frames;
   char figures[200];
   std::snprintf(figures, sizeof(figures), "%.3f bpvf, of which %.3f outside the animation streams and base meshes",
-                8.0 * double(whole) / vertex_frames(file.sampled), rest);
+                8.0 * double(whole) / frames, rest);
   if (rest >= options.codec.target) {
     char target[32];
     std::snprintf(target, sizeof(target), "%g", options.codec.target);
@@ -310,7 +311,7 @@ Status encode_model(const SampledFile& file, const std::vector<bool>& keep, cons
   CodecSettings codec = options.codec;
   codec.target -= rest;
   SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, codec, options, out));
-  const double reached = 8.0 * double(glb_size(out.model)) / vertex_frames(file.sampled);
+  const double reached = 8.0 * double(glb_size(out.model)) / frames;
   if (reached > kBpvfTolerance * options.codec.target) {
     char line[200];
     std::snprintf(line, sizeof(line),

@@ -251,6 +251,16 @@ Status read_rest_attributes(const tinygltf::Model& model, const tinygltf::Primit
   return Status::Ok();
 }
 
+void morph_positions(const std::vector<float>& rest, const std::vector<std::vector<float>>& deltas,
+                     const double* weights, std::vector<double>& out) {
+  out.assign(rest.begin(), rest.end());
+  for (size_t t = 0; t < deltas.size(); ++t) {
+    if (weights[t] == 0 || deltas[t].empty()) continue;
+    const float* delta = deltas[t].data();
+    for (size_t i = 0; i < out.size(); ++i) out[i] += weights[t] * delta[i];
+  }
+}
+
 Status sample_node(const tinygltf::Model& model, const Scene& scene, const AnimatedNode& node,
                    const SampleSettings& settings, SampledNode& out,
                    const std::vector<std::vector<float>>* clip_times) {
@@ -368,14 +378,8 @@ Status sample_node(const tinygltf::Model& model, const Scene& scene, const Anima
       for (size_t p = 0; p < inputs.size(); ++p) {
         const PrimitiveInput& input = inputs[p];
         const size_t values = input.vertex_count * 3;
-        // Morph first (in double: a float base plus one float delta is exact, so one-hot sequences
-        // reproduce their frames bit for bit), then skin.
-        morphed.assign(input.positions.begin(), input.positions.end());
-        for (size_t t = 0; t < target_count; ++t) {
-          if (weights[t] == 0 || input.deltas[t].empty()) continue;
-          const float* delta = input.deltas[t].data();
-          for (size_t i = 0; i < values; ++i) morphed[i] += weights[t] * delta[i];
-        }
+        // Morph first, then skin.
+        morph_positions(input.positions, input.deltas, weights.data(), morphed);
         float* frame = out.primitives[p].clips[c].frame(f);
         if (!joints) {
           for (size_t i = 0; i < values; ++i) frame[i] = float(morphed[i]);

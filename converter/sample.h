@@ -62,6 +62,12 @@ struct SampledPrimitive {
 Status read_rest_attributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive, const std::string& what,
                             SampledPrimitive& out);
 
+// Positions under morph targets as glTF renders them: rest + Σ_t weights[t] × deltas[t] (deltas: per target V × 3,
+// empty for a target without POSITION), in double: a float rest plus one float delta is exact, so one-hot
+// sequences reproduce their frames bit for bit. out: V × 3.
+void morph_positions(const std::vector<float>& rest, const std::vector<std::vector<float>>& deltas,
+                     const double* weights, std::vector<double>& out);
+
 struct SampledNode {
   const AnimatedNode* node = nullptr;
   std::vector<bool> clip_is_step;  // per clip: every track that moves the node uses STEP
