@@ -192,6 +192,19 @@ void DecodeEntropy(benchmark::State& state) {
 }
 BENCHMARK(DecodeEntropy)->Unit(benchmark::kMillisecond);
 
+// The stream up to its residuals: header, welding, labels, motion, weights.
+void DecodeHead(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  for (auto _ : state) {
+    StreamContent content;
+    StreamReader reader(f.stream.data(), f.stream.size());
+    Status status = reader.read_head(f.base, content);
+    benchmark::DoNotOptimize(content.weight_value.data());
+    if (!status.ok()) state.SkipWithError(status.message().c_str());
+  }
+}
+BENCHMARK(DecodeHead)->Unit(benchmark::kMillisecond);
+
 // Everything after entropy decoding: per frame, the prediction, the residual loop and the original vertex order.
 void DecodeFrames(benchmark::State& state) {
   const Fixture& f = *fixture;

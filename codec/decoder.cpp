@@ -2,6 +2,8 @@
 // written straight into the clips' original vertex order.
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
 
 #include "codec.h"
 #include "reconstruction.h"
@@ -14,17 +16,25 @@ Status decode_animation(const uint8_t* data, size_t size, const std::vector<floa
   for (uint32_t index : triangles)
     if (index >= base.size() / 3) return Status(StatusCode::invalid_argument, "a triangle names a missing vertex");
   StreamContent content;
-  SEGMORPH_RETURN_IF_ERROR(read_stream(data, size, base, content));
-  return reconstruct_clips(content, base, triangles, clips);
+  StreamReader reader(data, size);
+  SEGMORPH_RETURN_IF_ERROR(reader.read_head(base, content));
+  SEGMORPH_RETURN_IF_ERROR(reconstruct_clips(content, reader, base, triangles, clips));
+  return reader.finish();
 }
 
-Status reconstruct_clips(const StreamContent& content, const std::vector<float>& base,
-                         const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
+namespace {
+
+// Frame `frame`'s W × 3 residual symbols into `row`.
+using ResidualSource = std::function<Status(size_t frame, int64_t* row)>;
+
+Status reconstruct(const StreamContent& content, const ResidualSource& residuals, const std::vector<float>& base,
+                   const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
   const std::vector<float> welded = welded_base(base, content);
   const AffineMotion motion = dequantized_motion(content, welded);
   const ClusterWeights weights = dequantized_weights(content);
   const ResidualTraversal traversal = residual_traversal(content, triangles);
   ResidualReconstructor reconstructor(content, traversal);
+  const FramePredictor predictor(welded.data(), motion, weights);
 
   // Two frames at a time (ResidualReconstructor::two_frames), so that what the loop reads in traversal order
   // (predictions, symbols) and writes (welded positions) stays in cache.
@@ -34,8 +44,8 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
   std::vector<float> welded_frames(2 * row);
   // Frame `frame` of the stream into slot s (0 or 1) of the buffers: prediction and symbols.
   auto prepare = [&](size_t frame, size_t s) {
-    predict_frame(welded.data(), motion, weights, frame, &predictions[s * row]);
-    std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, symbols.begin() + ptrdiff_t(s * row));
+    predictor.predict(frame, &predictions[s * row]);
+    return residuals(frame, &symbols[s * row]);
   };
   auto symbol = [&](size_t s) {
     const int64_t* from = &symbols[s * row];
@@ -48,8 +58,9 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
   // Slot s, reconstructed, into frame f of the clip in the original vertex order.
   auto finish = [&](size_t s, FrameSequence& clip, size_t f) {
     const float* frame = &welded_frames[s * row];
-    for (size_t i = 0; i < row; ++i)
-      if (!std::isfinite(frame[i])) return false;
+    bool finite = true;  // no early exit, so that the loop vectorizes
+    for (size_t i = 0; i < row; ++i) finite &= std::fabs(frame[i]) <= std::numeric_limits<float>::max();
+    if (!finite) return false;
     float* out = &clip.positions[f * vertex_count * 3];
     for (size_t v = 0; v < vertex_count; ++v) {
       const float* in = &frame[size_t(content.welded_index[v]) * 3];
@@ -67,7 +78,7 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
     reconstructor.start_clip();
     for (size_t f = 0; f < clip.frame_count;) {
       const size_t count = std::min<size_t>(2, clip.frame_count - f);
-      for (size_t s = 0; s < count; ++s) prepare(frame + s, s);
+      for (size_t s = 0; s < count; ++s) SEGMORPH_RETURN_IF_ERROR(prepare(frame + s, s));
       if (count == 2)
         reconstructor.two_frames(&predictions[0], symbol(0), output(0), &predictions[row], symbol(1), output(1));
       else
@@ -79,6 +90,26 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
     }
   }
   return Status::Ok();
+}
+
+}  // namespace
+
+Status reconstruct_clips(const StreamContent& content, const std::vector<float>& base,
+                         const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
+  const size_t row = size_t(content.welded_count) * 3;
+  if (content.residuals.size() != content.frame_count() * row)
+    return Status(StatusCode::invalid_argument, "stream content has the wrong number of residuals");
+  auto copy = [&](size_t frame, int64_t* to) {
+    std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, to);
+    return Status::Ok();
+  };
+  return reconstruct(content, copy, base, triangles, clips);
+}
+
+Status reconstruct_clips(const StreamContent& content, StreamReader& reader, const std::vector<float>& base,
+                         const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
+  return reconstruct(
+      content, [&](size_t, int64_t* row) { return reader.read_frame(row); }, base, triangles, clips);
 }
 
 }  // namespace segmorph

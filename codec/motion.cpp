@@ -236,14 +236,29 @@ ClusterWeights fit_cluster_weights(const float* base, const Trajectories& frames
 
 void predict_frame(const float* base, const AffineMotion& motion, const ClusterWeights& weights, size_t frame,
                    double* out) {
-  const size_t vertex_count = weights.offset.size() - 1;
+  FramePredictor(base, motion, weights).predict(frame, out);
+}
+
+FramePredictor::FramePredictor(const float* base, const AffineMotion& motion, const ClusterWeights& weights)
+    : motion_(motion), weights_(weights), offset_(weights.cluster.size() * 3) {
+  for (size_t v = 0; v + 1 < weights.offset.size(); ++v)
+    for (uint32_t i = weights.offset[v]; i < weights.offset[v + 1]; ++i)
+      for (size_t c = 0; c < 3; ++c)
+        offset_[i * 3 + c] = double(base[v * 3 + c]) - motion.centroid[weights.cluster[i] * 3 + c];
+}
+
+void FramePredictor::predict(size_t frame, double* out) const {
+  // Term for term apply()'s expression (the spec fixes the order: the prediction is exact in double).
+  const size_t vertex_count = weights_.offset.size() - 1;
+  const double* transforms = motion_.transform(frame, 0);
   for (size_t v = 0; v < vertex_count; ++v) {
     double sum[3] = {0, 0, 0};
-    for (uint32_t i = weights.offset[v]; i < weights.offset[v + 1]; ++i) {
-      const uint32_t k = weights.cluster[i];
-      double y[3];
-      apply(motion.transform(frame, k), &motion.centroid[k * 3], base + v * 3, y);
-      for (int c = 0; c < 3; ++c) sum[c] += weights.weight[i] * y[c];
+    for (uint32_t i = weights_.offset[v]; i < weights_.offset[v + 1]; ++i) {
+      const double* t = transforms + size_t(weights_.cluster[i]) * 12;
+      const double* d = &offset_[size_t(i) * 3];
+      const double w = weights_.weight[i];
+      for (int r = 0; r < 3; ++r)
+        sum[r] += w * (t[r * 4] * d[0] + t[r * 4 + 1] * d[1] + t[r * 4 + 2] * d[2] + t[r * 4 + 3]);
     }
     for (int c = 0; c < 3; ++c) out[v * 3 + size_t(c)] = sum[c];
   }

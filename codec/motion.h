@@ -76,4 +76,17 @@ ClusterWeights own_cluster_weights(const Clusters& clusters);
 void predict_frame(const float* base, const AffineMotion& motion, const ClusterWeights& weights, size_t frame,
                    double* out);
 
+// predict_frame for frame after frame of one base, motion and weights (all must outlive it), with what does not
+// depend on the frame (each pair's x − c_k) computed once.
+class FramePredictor {
+ public:
+  FramePredictor(const float* base, const AffineMotion& motion, const ClusterWeights& weights);
+  void predict(size_t frame, double* out) const;
+
+ private:
+  const AffineMotion& motion_;
+  const ClusterWeights& weights_;
+  std::vector<double> offset_;  // per (cluster, weight) pair: x − c_k, 3 doubles
+};
+
 }  // namespace segmorph

@@ -106,8 +106,8 @@ std::vector<double> predicted_frames(const StreamContent& content, const std::ve
   const ClusterWeights weights = dequantized_weights(content);
   const size_t row = size_t(content.welded_count) * 3;
   std::vector<double> predictions(content.frame_count() * row);
-  for (size_t f = 0; f < content.frame_count(); ++f)
-    predict_frame(welded.data(), motion, weights, f, &predictions[f * row]);
+  const FramePredictor predictor(welded.data(), motion, weights);
+  for (size_t f = 0; f < content.frame_count(); ++f) predictor.predict(f, &predictions[f * row]);
   return predictions;
 }
 

@@ -95,6 +95,11 @@ class ResidualReconstructor {
 Status reconstruct_clips(const StreamContent& content, const std::vector<float>& base,
                          const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips);
 
+// The same with the residuals coming from `reader` a frame at a time (content: its read_head(); its residuals
+// are not used): the decoder's one pass. Does not call reader.finish().
+Status reconstruct_clips(const StreamContent& content, StreamReader& reader, const std::vector<float>& base,
+                         const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips);
+
 }  // namespace segmorph
 
 #include "reconstruction_inl.h"

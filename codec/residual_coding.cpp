@@ -4,6 +4,21 @@
 #include <cassert>
 
 namespace segmorph {
+
+// The models of one axis (spec section 8.1).
+struct AxisModels {
+  std::array<BitModel, 36> nonzero;
+  std::array<BitModel, 9> negative;
+  std::array<BitModel, 9> above_one;  // |r| > 1, given r ≠ 0
+  std::array<BitModel, 9> above_two;  // |r| > 2, given |r| > 1
+  UnsignedModel magnitude_minus_three;
+};
+
+struct ResidualModels {
+  std::array<BitModel, 64> vertex;  // some residual of the vertex is nonzero
+  std::array<AxisModels, 3> axis;
+};
+
 namespace {
 
 constexpr int64_t kEscape = INT32_MIN;  // lossless only: the residual follows as 64 direct bits
@@ -49,20 +64,6 @@ constexpr ContextTables kContexts = make_context_tables();
 size_t vertex_context(const History* h) {
   return size_t(kContexts.vertex[h[0]]) + kContexts.vertex[h[1]] + kContexts.vertex[h[2]];
 }
-
-// The models of one axis (spec section 8.1).
-struct AxisModels {
-  std::array<BitModel, 36> nonzero;
-  std::array<BitModel, 9> negative;
-  std::array<BitModel, 9> above_one;  // |r| > 1, given r ≠ 0
-  std::array<BitModel, 9> above_two;  // |r| > 2, given |r| > 1
-  UnsignedModel magnitude_minus_three;
-};
-
-struct ResidualModels {
-  std::array<BitModel, 64> vertex;  // some residual of the vertex is nonzero
-  std::array<AxisModels, 3> axis;
-};
 
 // One symbol in [INT32_MIN, INT32_MAX]. `earlier`: an earlier axis of this vertex and frame is nonzero (0 or 1);
 // `implied_nonzero`: the symbol is known to be nonzero, its flag is not coded.
@@ -150,33 +151,44 @@ void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residua
   }
 }
 
+ResidualDecoder::ResidualDecoder(size_t welded_count, bool lossless)
+    : welded_count_(welded_count),
+      lossless_(lossless),
+      models_(std::make_unique<ResidualModels>()),
+      history_(welded_count * 3, 0) {}
+
+ResidualDecoder::~ResidualDecoder() = default;
+
+void ResidualDecoder::decode_frame(RangeDecoder& decoder, int64_t* r) {
+  ResidualModels& models = *models_;
+  History* h = history_.data();
+  for (size_t w = 0; w < welded_count_; ++w, r += 3, h += 3) {
+    if (decoder.decode_bit(models.vertex[vertex_context(h)]) == 0) {
+      r[0] = r[1] = r[2] = 0;
+      h[0] = next_history(h[0], 0), h[1] = next_history(h[1], 0), h[2] = next_history(h[2], 0);
+      continue;
+    }
+    for (size_t axis = 0; axis < 3; ++axis) {
+      const bool earlier = (axis >= 1 && r[0] != 0) || (axis == 2 && r[1] != 0);
+      int64_t value = decode_symbol(decoder, models.axis[axis], h[axis], earlier, axis == 2 && !earlier);
+      if (value == kEscape) value = decode_escaped(decoder, lossless_);
+      r[axis] = value;
+    }
+    for (size_t axis = 0; axis < 3; ++axis) h[axis] = next_history(h[axis], r[axis]);
+  }
+}
+
 Status decode_residuals(RangeDecoder& decoder, size_t welded_count, size_t frame_count, bool lossless,
                         std::vector<int64_t>& residuals) {
   const size_t row = welded_count * 3;
   assert(row > 0);
-  ResidualModels models;
-  std::vector<History> history(row, 0);
+  ResidualDecoder frames(welded_count, lossless);
   residuals.clear();
   for (size_t frame = 0; frame < frame_count; ++frame) {
-    if (decoder.failed()) return decoder.finish();
     residuals.resize((frame + 1) * row);
-    int64_t* r = &residuals[frame * row];
-    History* h = history.data();
-    for (size_t w = 0; w < welded_count; ++w, r += 3, h += 3) {
-      if (decoder.decode_bit(models.vertex[vertex_context(h)]) == 0) {
-        r[0] = r[1] = r[2] = 0;
-      } else {
-        for (size_t axis = 0; axis < 3; ++axis) {
-          const bool earlier = (axis >= 1 && r[0] != 0) || (axis == 2 && r[1] != 0);
-          int64_t value = decode_symbol(decoder, models.axis[axis], h[axis], earlier, axis == 2 && !earlier);
-          if (value == kEscape) value = decode_escaped(decoder, lossless);
-          r[axis] = value;
-        }
-      }
-      for (size_t axis = 0; axis < 3; ++axis) h[axis] = next_history(h[axis], r[axis]);
-      // Garbage decodes as fast as a stream: stop at the first sign of it rather than after every symbol.
-      if ((w & 0xFFF) == 0 && decoder.failed()) return decoder.finish();
-    }
+    frames.decode_frame(decoder, &residuals[frame * row]);
+    // Garbage decodes as fast as a stream: stop at the first sign of it.
+    if (decoder.failed()) return decoder.finish();
   }
   return Status::Ok();
 }

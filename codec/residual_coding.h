@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "range_coder.h"
@@ -26,10 +27,31 @@ namespace segmorph {
 // vertex, x y z (StreamContent::residuals); welded_count: W ≥ 1. Lossy residuals must lie in (INT32_MIN, INT32_MAX].
 void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residuals, size_t welded_count, bool lossless);
 
+// Decodes the symbols encode_residuals wrote, a frame at a time, so that a decoder can turn each frame into positions
+// while it is in cache. Problems (an escape in a lossy stream, a magnitude outside int32, a non-canonical escape,
+// running past the end of the stream) are the RangeDecoder's sticky flags: the caller checks decoder.failed() after
+// a frame and calls decoder.finish() at the end.
+struct ResidualModels;
+class ResidualDecoder {
+ public:
+  ResidualDecoder(size_t welded_count, bool lossless);
+  ~ResidualDecoder();
+  ResidualDecoder(const ResidualDecoder&) = delete;
+  ResidualDecoder& operator=(const ResidualDecoder&) = delete;
+
+  // The next frame's W × 3 symbols into row[0 .. W × 3).
+  void decode_frame(RangeDecoder& decoder, int64_t* row);
+
+ private:
+  size_t welded_count_;
+  bool lossless_;
+  std::unique_ptr<ResidualModels> models_;
+  std::vector<uint8_t> history_;  // W × 3, see residual_coding.cpp
+};
+
 // Decodes frame_count × W × 3 symbols written by encode_residuals into `residuals`, which grows a frame at a time
 // as the data proves to be there (a few bytes of stream can claim gigabytes of frames). Returns bad_data, and
-// stops early, once the stream is known to be bad (an escape in a lossy stream, a magnitude outside int32, a
-// non-canonical escape, or running past the end of the stream); the caller still calls decoder.finish() at the end.
+// stops early, once the stream is known to be bad; the caller still calls decoder.finish() at the end.
 Status decode_residuals(RangeDecoder& decoder, size_t welded_count, size_t frame_count, bool lossless,
                         std::vector<int64_t>& residuals);
 

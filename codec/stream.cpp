@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <numeric>
@@ -154,8 +155,15 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   }
 }
 
-Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& base, StreamContent& content) {
+StreamReader::StreamReader(const uint8_t* data, size_t size) : data_(data), size_(size) {}
+
+StreamReader::~StreamReader() = default;
+
+Status StreamReader::read_head(const std::vector<float>& base, StreamContent& content) {
+  const uint8_t* data = data_;
+  const size_t size = size_;
   content = StreamContent();
+  content_ = &content;
   if (size < format::kHeaderBytes || std::memcmp(data, format::kMagic, 4) != 0)
     return Status(StatusCode::bad_data, "not a segmorph animation stream (bad magic)");
   if (data[4] != format::kVersion)
@@ -169,7 +177,8 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
   if (length != size - format::kHeaderBytes)
     return Status(StatusCode::bad_data, length > size - format::kHeaderBytes ? "animation stream is truncated"
                                                                              : "animation stream has trailing bytes");
-  RangeDecoder decoder(data + format::kHeaderBytes, size - format::kHeaderBytes);
+  decoder_ = std::make_unique<RangeDecoder>(data + format::kHeaderBytes, size - format::kHeaderBytes);
+  RangeDecoder& decoder = *decoder_;
   Models models;
   auto corrupt = [](const std::string& what) { return Status(StatusCode::bad_data, "animation stream: " + what); };
 
@@ -266,14 +275,41 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
     if (!lossless && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
       return corrupt("bad residual quantizer step");
   }
-  SEGMORPH_RETURN_IF_ERROR(decode_residuals(decoder, content.welded_count, frames, lossless, content.residuals));
+  if (decoder.failed()) return decoder.finish();
+  residuals_ = std::make_unique<ResidualDecoder>(content.welded_count, lossless);
+  return Status::Ok();
+}
+
+Status StreamReader::read_frame(int64_t* row) {
+  assert(residuals_);
+  residuals_->decode_frame(*decoder_, row);
+  // Garbage decodes as fast as a stream: stop at the first sign of it.
+  if (decoder_->failed()) return decoder_->finish();
   // Lossless residuals are differences of ordered_bits values (all in [−2^31, 2^31)), so within ±(2^32 − 1); the
   // coder's escapes carry any 64-bit value, which the reconstruction would overflow adding it to a pattern.
-  if (lossless)
-    for (int64_t value : content.residuals)
-      if (value < -format::kMaxLosslessResidual || value > format::kMaxLosslessResidual)
-        return corrupt("lossless residual out of range");
-  return decoder.finish();
+  if (content_->flags & format::kFlagLossless)
+    for (size_t i = 0; i < size_t(content_->welded_count) * 3; ++i)
+      if (row[i] < -format::kMaxLosslessResidual || row[i] > format::kMaxLosslessResidual)
+        return Status(StatusCode::bad_data, "animation stream: lossless residual out of range");
+  return Status::Ok();
+}
+
+Status StreamReader::finish() const {
+  assert(decoder_);
+  return decoder_->finish();
+}
+
+Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& base, StreamContent& content) {
+  StreamReader reader(data, size);
+  SEGMORPH_RETURN_IF_ERROR(reader.read_head(base, content));
+  // The residuals grow a frame at a time as the data proves to be there (a few bytes of stream can claim
+  // gigabytes of frames).
+  const size_t row = size_t(content.welded_count) * 3, frames = content.frame_count();
+  for (size_t f = 0; f < frames; ++f) {
+    content.residuals.resize((f + 1) * row);
+    SEGMORPH_RETURN_IF_ERROR(reader.read_frame(&content.residuals[f * row]));
+  }
+  return reader.finish();
 }
 
 }  // namespace segmorph

@@ -3,11 +3,15 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "status.h"
 
 namespace segmorph {
+
+class RangeDecoder;
+class ResidualDecoder;
 
 struct StreamContent {
   uint8_t flags = 0;          // format::kFlag*
@@ -51,6 +55,30 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
 // Parses a stream whose decoder-side facts are `base` (V × 3 floats): V must match, welding groups come from
 // it. Every count is checked against format limits and the data before anything is sized by it.
 Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& base, StreamContent& content);
+
+// read_stream in steps, for a decoder that turns each frame's residuals into positions as they come (in cache, and
+// without holding F × W × 3 symbols): read_head() parses everything before the residuals into `content` (which
+// must outlive the reader; content.residuals stays empty), read_frame() the next frame's W × 3 residual symbols,
+// finish() checks that the stream ends after the last. Each step fails with bad_data as soon as the data is known
+// to be bad; then the reader must not be used further.
+class StreamReader {
+ public:
+  StreamReader(const uint8_t* data, size_t size);
+  ~StreamReader();
+  StreamReader(const StreamReader&) = delete;
+  StreamReader& operator=(const StreamReader&) = delete;
+
+  Status read_head(const std::vector<float>& base, StreamContent& content);
+  Status read_frame(int64_t* row);
+  Status finish() const;
+
+ private:
+  const uint8_t* data_;
+  size_t size_;
+  const StreamContent* content_ = nullptr;
+  std::unique_ptr<RangeDecoder> decoder_;
+  std::unique_ptr<ResidualDecoder> residuals_;
+};
 
 // Groups of vertices with bit-identical base positions, in order of their first vertex; each group lists its
 // vertices ascending. Singletons are included.
