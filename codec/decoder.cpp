@@ -61,6 +61,7 @@ Status reconstruct(const StreamContent& content, const ResidualSource& residuals
     bool finite = true;  // no early exit, so that the loop vectorizes
     for (size_t i = 0; i < row; ++i) finite &= std::fabs(frame[i]) <= std::numeric_limits<float>::max();
     if (!finite) return false;
+    clip.positions.resize((f + 1) * vertex_count * 3);
     float* out = &clip.positions[f * vertex_count * 3];
     for (size_t v = 0; v < vertex_count; ++v) {
       const float* in = &frame[size_t(content.welded_index[v]) * 3];
@@ -74,7 +75,8 @@ Status reconstruct(const StreamContent& content, const ResidualSource& residuals
     FrameSequence& clip = clips[c];
     clip.vertex_count = vertex_count;
     clip.frame_count = content.clip_frames[c];
-    clip.positions.resize(clip.frame_count * vertex_count * 3);
+    // The frames grow as they are decoded, never sized up front by the counts: a stream of a few bytes can claim
+    // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.
     reconstructor.start_clip();
     for (size_t f = 0; f < clip.frame_count;) {
       const size_t count = std::min<size_t>(2, clip.frame_count - f);

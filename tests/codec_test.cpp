@@ -12,6 +12,7 @@
 #include "metrics.h"
 #include "sample.h"
 #include "stream.h"
+#include "stream_format.h"
 #include "test_files.h"
 #include "test_meshes.h"
 
@@ -264,6 +265,32 @@ TEST(CodecHostile, ShortStreamClaimingMillionsOfFramesAllocatesNothingForThem) {
   // What was decoded before the data ran out, not 60 million coefficients.
   EXPECT_LT(content.motion.capacity(), 1000u);
   EXPECT_EQ(content.residuals.capacity(), 0u);
+}
+
+// The decoder turns residuals into frames as it reads them. A stream whose head is whole (its motion is there for
+// every frame it claims) but whose residuals stop short must not have the claimed frames allocated first: the
+// output grows with what decodes, as the motion and the residuals do.
+TEST(CodecHostile, StreamCutInItsResidualsAllocatesOnlyTheFramesItDecoded) {
+  const std::vector<FrameSequence> clips = {bending_clip(400, 1.0, 0)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  const Encoded encoded = encode(clips, base, CodecSettings());
+  StreamContent content;
+  ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+  std::vector<uint8_t> stream;
+  StreamSizes sizes;
+  write_stream(content, base, stream, &sizes);
+  ASSERT_EQ(stream, encoded.stream);
+  // The head (the range coder holds back up to a few of its bytes) and a little of the residuals, with the length
+  // field to match.
+  ASSERT_GT(sizes.residuals, 1000u);
+  stream.resize(sizes.motion + 16);
+  const uint32_t length = uint32_t(stream.size() - format::kHeaderBytes);
+  for (int i = 0; i < 4; ++i) stream[6 + size_t(i)] = uint8_t(length >> (8 * i));
+  std::vector<FrameSequence> decoded;
+  EXPECT_EQ(decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded).code(),
+            StatusCode::bad_data);
+  ASSERT_EQ(decoded.size(), 1u);
+  EXPECT_LE(decoded[0].positions.capacity(), 4 * clips[0].vertex_count * 3);  // not 400 frames
 }
 
 // A lossless escape carries any 64-bit value. Added to the float pattern of a prediction, one beyond the largest
