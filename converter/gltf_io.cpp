@@ -4,6 +4,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -206,6 +209,48 @@ Status prepare_for_tinygltf(bool binary, std::string& bytes) {
   return Status::Ok();
 }
 
+// A double that holds a float exactly (as the numbers of most glTF files do: they were floats in the exporter)
+// becomes the double nearest the shortest decimal that reads back as that float, which the JSON writer prints
+// in those few digits: 0.9999998807907104 becomes 0.99999988. Readers that take the number as a float get the
+// same float; those that keep doubles get it within half a float's last digit, as the exporter meant it. A double
+// that is not a float (a georeferenced translation, say) is left as it is.
+void shorten(double& value) {
+  const float single = float(value);
+  if (!(double(single) == value) || !std::isfinite(single)) return;
+  char text[32];
+  const std::to_chars_result end = std::to_chars(text, text + sizeof(text), single);
+  if (end.ec != std::errc()) return;
+  *end.ptr = '\0';
+  const double shortened = std::strtod(text, nullptr);
+  if (float(shortened) == single) value = shortened;
+}
+
+void shorten(std::vector<double>& values) {
+  for (double& value : values) shorten(value);
+}
+
+// The glTF numbers the format defines as floats: node transforms and weights, floating-point accessors' bounds,
+// mesh weights, material factors. Extensions and extras are left as they are.
+void shorten_float_numbers(tinygltf::Model& model) {
+  for (tinygltf::Node& node : model.nodes) {
+    shorten(node.translation), shorten(node.rotation), shorten(node.scale), shorten(node.matrix);
+    shorten(node.weights);
+  }
+  for (tinygltf::Accessor& accessor : model.accessors)
+    if (accessor.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT)
+      shorten(accessor.minValues), shorten(accessor.maxValues);
+  for (tinygltf::Mesh& mesh : model.meshes) shorten(mesh.weights);
+  for (tinygltf::Material& material : model.materials) {
+    shorten(material.pbrMetallicRoughness.baseColorFactor);
+    shorten(material.pbrMetallicRoughness.metallicFactor);
+    shorten(material.pbrMetallicRoughness.roughnessFactor);
+    shorten(material.emissiveFactor);
+    shorten(material.alphaCutoff);
+    shorten(material.normalTexture.scale);
+    shorten(material.occlusionTexture.strength);
+  }
+}
+
 }  // namespace
 
 bool has_gltf_extension(const std::string& path) {
@@ -358,6 +403,7 @@ void repack(tinygltf::Model& model) {
 
 size_t glb_size(tinygltf::Model model) {
   repack(model);
+  shorten_float_numbers(model);
   tinygltf::TinyGLTF writer;
   writer.SetImageWriter(write_no_image, nullptr);
   std::ostringstream stream;
@@ -369,6 +415,7 @@ Status save_gltf(tinygltf::Model& model, const std::string& path) {
   if (!binary && !ends_with(path, ".gltf"))
     return Status(StatusCode::invalid_argument, "output must end in .glb or .gltf");
   repack(model);
+  shorten_float_numbers(model);
 
   const size_t slash = path.find_last_of('/');
   const std::string directory = slash == std::string::npos ? "." : path.substr(0, slash);

@@ -20,7 +20,8 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
 void repack(tinygltf::Model& model);
 
 // Repacks `model` and writes it to `path`, binary if it ends in .glb, JSON with a .bin beside it if it ends
-// in .gltf. The files appear whole or not at all: they are written under temporary names and renamed.
+// in .gltf. Numbers glTF defines as floats that hold a float exactly are written in the fewest digits that read
+// back as that float. The files appear whole or not at all: they are written under temporary names and renamed.
 Status save_gltf(tinygltf::Model& model, const std::string& path);
 
 // The bytes save_gltf would write for `model` as a .glb (images that are files included as it embeds them).

@@ -29,7 +29,7 @@ const char* const kUsage =
     "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
     "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
-    "         [--targets auto|keep|bake] [--json]\n"
+    "         [--normal-bits B] [--texcoord-bits B] [--targets auto|keep|bake] [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
     "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
     "      (see --targets). Default target: --error 0.15 (KG error in %).\n"
@@ -53,6 +53,9 @@ const char* const kUsage =
     "  --clusters K       encode: number of motion clusters (default: automatic)\n"
     "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 30 (default: from\n"
     "                     the error target, at least 12; 14 with --bpvf or --lossless)\n"
+    "  --normal-bits B    encode: Draco quantization bits of the base mesh normals, 4 to 16 (default 8)\n"
+    "  --texcoord-bits B  encode: Draco quantization bits of the base mesh texture coordinates, 4 to 30\n"
+    "                     (default 12)\n"
     "  --targets MODE     encode: what a morph-target mesh (unskinned, one node) stores. keep: its targets,\n"
     "                     compressed, played by its own weights animation; bake: its sampled frames, like a\n"
     "                     skinned mesh. auto (default): where a mesh has at most half as many targets as\n"
@@ -502,9 +505,12 @@ int run(int argc, char** argv) {
       if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
       options.rate_given = true;
       options.codec.mode = RateMode::lossless;
-    } else if (arg == "--clusters" || arg == "--position-bits") {
+    } else if (arg == "--clusters" || arg == "--position-bits" || arg == "--normal-bits" || arg == "--texcoord-bits") {
       const bool clusters = arg == "--clusters";
-      const long low = clusters ? 1 : 8, high = clusters ? 65535 : 30;
+      long low = 4, high = 30;  // --texcoord-bits
+      if (clusters) low = 1, high = 65535;
+      if (arg == "--position-bits") low = 8;
+      if (arg == "--normal-bits") high = 16;
       std::string text;
       if (!value(text)) return usage_error(arg + " needs a number");
       char* end = nullptr;
@@ -514,8 +520,12 @@ int run(int argc, char** argv) {
                            ", not '" + text + "'");
       if (clusters)
         options.codec.clusters = size_t(number);
-      else
+      else if (arg == "--position-bits")
         options.draco.position_bits = int(number);
+      else if (arg == "--normal-bits")
+        options.draco.normal_bits = int(number);
+      else
+        options.draco.texcoord_bits = int(number);
     } else if (arg == "--targets") {
       std::string text;
       if (!value(text)) return usage_error("--targets needs auto, keep or bake");

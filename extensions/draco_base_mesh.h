@@ -24,8 +24,10 @@ struct BaseMesh {
 };
 
 struct DracoSettings {
-  int position_bits = 14;  // quantization bits per attribute kind (Draco's defaults but for positions)
-  int normal_bits = 10;
+  // Quantization bits per attribute kind. Normals: 8, Draco's and gltfpack's default (10 measured 1.8 KB more
+  // on CesiumMan's 3273 vertices, 0.7 % of its file). Texture coordinates: 12, gltfpack's default (Draco's is 10).
+  int position_bits = 14;
+  int normal_bits = 8;
   int texcoord_bits = 12;
   int color_bits = 8;
   int generic_bits = 12;

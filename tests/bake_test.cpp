@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <memory>
 
 #include "accessor.h"
@@ -105,6 +107,37 @@ void expect_bake_round_trip(const std::string& path, bool exact) {
   EXPECT_EQ(baked->model.textures.size(), original->model.textures.size());
   ASSERT_EQ(baked->model.images.size(), original->model.images.size());
   EXPECT_EQ(baked->model.animations.size(), original->model.animations.size());
+}
+
+// Float numbers are written in the fewest digits that read back as the same float; a number that is not a float
+// keeps every digit.
+TEST(GltfWriter, FloatNumbersAreShortAndReadBackAsTheSameFloat) {
+  tinygltf::Model model;
+  tinygltf::Node node;
+  const double rotation_w = double(0.99999988f);  // 1 − 2^-23: 0.9999998807907104 as a double, "0.9999999" as a float
+  node.rotation = {0.0, 0.0, double(0.0004882812f), rotation_w};
+  node.translation = {1234567.123456789, double(-0.1f), 0.0};  // a double (georeferenced, say), then a float
+  node.name = "n";
+  model.nodes.push_back(node);
+  model.scenes.push_back(tinygltf::Scene());
+  model.scenes[0].nodes = {0};
+  model.defaultScene = 0;
+  model.asset.version = "2.0";
+  const std::string path = temporary_path("short_numbers.gltf");
+  ASSERT_TRUE(save_gltf(model, path).ok());
+  std::ifstream file(path);
+  const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("0.9999999\n"), std::string::npos) << text;
+  EXPECT_EQ(text.find("0.9999998807907104"), std::string::npos) << text;
+  EXPECT_NE(text.find("-0.1,"), std::string::npos) << text;
+  EXPECT_NE(text.find("1234567.123456789"), std::string::npos) << text;
+  tinygltf::Model read;
+  ASSERT_TRUE(load_gltf(path, read).ok());
+  ASSERT_EQ(read.nodes.size(), 1u);
+  EXPECT_EQ(float(read.nodes[0].rotation[3]), 0.99999988f);
+  EXPECT_EQ(float(read.nodes[0].rotation[2]), 0.0004882812f);
+  EXPECT_EQ(float(read.nodes[0].translation[1]), -0.1f);
+  EXPECT_EQ(read.nodes[0].translation[0], 1234567.123456789);
 }
 
 TEST(Bake, BundledSamplesRoundTrip) {

@@ -268,6 +268,25 @@ TEST(Cli, BaseMeshPrecisionFollowsTheErrorTarget) {
   EXPECT_LT(draco_bytes("--error 1 --position-bits 12"), draco_bytes("--error 1 --position-bits 16"));
 }
 
+// --normal-bits and --texcoord-bits set the base mesh's other precisions (RiggedSimple has normals, Fox texture
+// coordinates); a finer one costs more Draco bytes.
+TEST(Cli, BaseMeshNormalAndTexcoordPrecisionsAreOptions) {
+  const std::string directory = output_directory("attribute_bits");
+  auto draco_bytes = [&](const std::string& file, const std::string& options) {
+    const Result result = run("encode -q " + sample(file) + " -o " + directory + "/out.glb --json " + options);
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return json_number(result.out, "draco_bytes");
+  };
+  EXPECT_EQ(draco_bytes("RiggedSimple/RiggedSimple.glb", ""),
+            draco_bytes("RiggedSimple/RiggedSimple.glb", "--normal-bits 8"));
+  EXPECT_LT(draco_bytes("RiggedSimple/RiggedSimple.glb", ""),
+            draco_bytes("RiggedSimple/RiggedSimple.glb", "--normal-bits 12"));
+  EXPECT_EQ(draco_bytes("Fox/Fox.glb", ""), draco_bytes("Fox/Fox.glb", "--texcoord-bits 12"));
+  EXPECT_GT(draco_bytes("Fox/Fox.glb", ""), draco_bytes("Fox/Fox.glb", "--texcoord-bits 6"));
+  for (const char* bad : {"--normal-bits 3", "--normal-bits 17", "--texcoord-bits 31", "--texcoord-bits x"})
+    EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o " + directory + "/bad.glb " + bad).exit_code, 2) << bad;
+}
+
 // KHR_draco_mesh_compression gives a compressed primitive an indices accessor without a bufferView, as
 // segmorph writes and other tools do; tinygltf 2.7 refuses it, so segmorph rewrites the JSON before parsing
 // (json_prepass.h). Both .gltf and .glb.
