@@ -64,18 +64,24 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
     inverse[k] = (gram[k] + rho[k] * Eigen::Matrix3d::Identity()).inverse();
   }
 
+  // B = Σ (y − ȳ) xᵀ = Σ y xᵀ − ȳ (Σ x)ᵀ: one pass over the frame's vertices for both sums (Σ x is 0 but for
+  // rounding, kept so that B does not depend on where the frame sits).
+  std::vector<Eigen::Vector3d> centred_sum(cluster_count, Eigen::Vector3d::Zero());
+  for (size_t v = 0; v < vertex_count; ++v) centred_sum[clusters.label[v]] += centred[v];
   std::vector<Eigen::Matrix3d> moments(cluster_count);
   std::vector<Eigen::Vector3d> mean(cluster_count);
   for (size_t f = 0; f < frames.frame_count; ++f) {
     const float* frame = frames.frame(f);
     for (size_t k = 0; k < cluster_count; ++k) moments[k].setZero(), mean[k].setZero();
-    for (size_t v = 0; v < vertex_count; ++v)
-      mean[clusters.label[v]] += Eigen::Vector3d(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]);
-    for (size_t k = 0; k < cluster_count; ++k) mean[k] /= double(std::max<size_t>(size[k], 1));
     for (size_t v = 0; v < vertex_count; ++v) {
       const uint32_t k = clusters.label[v];
-      moments[k] +=
-          (Eigen::Vector3d(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]) - mean[k]) * centred[v].transpose();
+      const Eigen::Vector3d y(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]);
+      mean[k] += y;
+      moments[k] += y * centred[v].transpose();
+    }
+    for (size_t k = 0; k < cluster_count; ++k) {
+      mean[k] /= double(std::max<size_t>(size[k], 1));
+      moments[k] -= mean[k] * centred_sum[k].transpose();
     }
     for (size_t k = 0; k < cluster_count; ++k) {
       Eigen::JacobiSVD<Eigen::Matrix3d> svd(moments[k], Eigen::ComputeFullU | Eigen::ComputeFullV);
