@@ -283,6 +283,23 @@ TEST(Cli, AutomaticClusterCountIsNearTheBestFixedOne) {
   EXPECT_LE(stream_bytes(""), 1.02 * best);
 }
 
+// The Fox stores each vertex once per triangle (1728 vertices, 434 distinct): the copies are coded once, and the
+// decoded file has the 434, with the animation within its error bound.
+TEST(Cli, CopiesOfAVertexAreCodedOnce) {
+  const std::string directory = output_directory("vertex_copies");
+  const std::string input = sample("Fox/Fox.glb"), encoded = directory + "/fox.glb", decoded = directory + "/plain.glb";
+  Result result = run("encode -q " + input + " -o " + encoded + " --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_LT(json_number(result.out, "draco_bytes"), 4000);  // 10950 with every copy
+  ASSERT_EQ(run("decode -q " + encoded + " -o " + decoded).exit_code, 0);
+  result = run("info -q " + decoded + " --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(json_number(result.out, "vertices"), 434);
+  result = run("verify -q " + input + " " + decoded + " --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_LE(json_number(result.out, "kg_percent"), 0.15);
+}
+
 // --normal-bits and --texcoord-bits set the base mesh's other precisions (RiggedSimple has normals, Fox texture
 // coordinates); a finer one costs more Draco bytes.
 TEST(Cli, BaseMeshNormalAndTexcoordPrecisionsAreOptions) {
