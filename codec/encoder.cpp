@@ -41,9 +41,10 @@ constexpr int kWeightBits = 8;
 constexpr double kMotionStepRatio = 0.5;
 // Other ratios tried with an error target (which one wins depends on the sequence: docs/codec.md).
 constexpr double kMotionStepRatioTrials[] = {0.25, 1.0};
-// Lossy steps (residual and motion translation) are at least 2^-kFinestStepBits of the base mesh's bounding-box
-// diagonal: finer than float positions resolve, they buy nothing, and they would make the quantized values
-// outgrow int32 (a --bpvf target far above what the frames need got there). Quantized motion coefficients are
+// Lossy steps (residual and motion translation) are at least 2^-kFinestStepBits of the bounding-box diagonal of
+// every position of every frame: finer than float positions resolve, they buy nothing, and they would make the
+// quantized values outgrow int32 (a --bpvf target far above what the frames need got there; so did a primitive
+// whose vertices all sit on one point while it moves, when the scale was the base mesh's diagonal, 0). Quantized motion coefficients are
 // clamped to ±kMaxMotionCoefficient, so that frame-to-frame differences fit in int32 too.
 constexpr int kFinestStepBits = 24;
 constexpr double kMaxMotionCoefficient = double(1 << 29);
@@ -221,8 +222,10 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   double mean_step = std::sqrt(12.0 * std::max(report.e_pi_before_refinement, 1e-12)) *
                      bounding_box_diagonal(base.data(), vertex_count) * 0.1;
   if (settings.mode == RateMode::error) mean_step = expected_residual_step(clips, spread, settings.target);
-  const double finest_step =
-      std::max(bounding_box_diagonal(base.data(), vertex_count), 1e-30) * std::exp2(-kFinestStepBits);
+  double extent = bounding_box_diagonal(base.data(), vertex_count);
+  for (const FrameSequence& clip : clips)
+    extent = std::max(extent, bounding_box_diagonal(clip.positions.data(), clip.vertex_count * clip.frame_count));
+  const double finest_step = std::max(extent, 1e-30) * std::exp2(-kFinestStepBits);
   mean_step = std::max(mean_step, finest_step);
 
   // The cost of a candidate segmentation for the automatic K, smaller is better: with an error target, the

@@ -95,7 +95,8 @@ Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& p
 // same with one vertex in place of its copies.
 BaseMesh merge_copies(const BaseMesh& base, const std::vector<FrameSequence>& frames, std::vector<uint32_t>& first) {
   const size_t vertex_count = base.vertex_count;
-  // Each vertex's bits, hashed (FNV-1a over the 32-bit words); equal hashes are compared in full.
+  // Each vertex's bits, hashed (FNV-1a over the 32-bit words); equal hashes are compared in full (only distinct
+  // vertices whose hashes collide cost more than one comparison).
   auto for_each_word = [&](size_t v, auto&& visit) {
     for (const BaseMeshAttribute& attribute : base.attributes)
       for (int c = 0; c < attribute.components; ++c) visit(attribute.values[v * size_t(attribute.components) + size_t(c)]);
@@ -115,10 +116,16 @@ BaseMesh merge_copies(const BaseMesh& base, const std::vector<FrameSequence>& fr
   }
   std::sort(hashed.begin(), hashed.end());
   auto same = [&](uint32_t a, uint32_t b) {
-    std::vector<float> words_a, words_b;
-    for_each_word(a, [&](float x) { words_a.push_back(x); });
-    for_each_word(b, [&](float x) { words_b.push_back(x); });
-    return std::memcmp(words_a.data(), words_b.data(), words_a.size() * sizeof(float)) == 0;
+    for (const BaseMeshAttribute& attribute : base.attributes) {
+      const size_t components = size_t(attribute.components);
+      if (std::memcmp(&attribute.values[a * components], &attribute.values[b * components],
+                      components * sizeof(float)) != 0)
+        return false;
+    }
+    for (const FrameSequence& clip : frames)
+      for (size_t f = 0; f < clip.frame_count; ++f)
+        if (std::memcmp(clip.frame(f) + a * 3, clip.frame(f) + b * 3, 3 * sizeof(float)) != 0) return false;
+    return true;
   };
   std::vector<uint32_t> leader(vertex_count);
   for (size_t i = 0; i < vertex_count;) {
@@ -135,6 +142,18 @@ BaseMesh merge_copies(const BaseMesh& base, const std::vector<FrameSequence>& fr
         }
     }
     i = end;
+  }
+  // Never two corners of one triangle: Draco drops a triangle with a repeated vertex, and with it a vertex that
+  // only such triangles use (and its animation). A corner that would repeat another keeps its own vertex.
+  for (size_t t = 0; t + 2 < base.triangles.size(); t += 3) {
+    const uint32_t* corner = &base.triangles[t];
+    for (int k = 1; k < 3; ++k)
+      for (int j = 0; j < k; ++j)
+        if (corner[k] != corner[j] && leader[corner[k]] == leader[corner[j]]) {
+          // The one that is not the leader goes back to itself (nothing joined it, so nothing else moves).
+          const uint32_t copy = leader[corner[k]] == corner[k] ? corner[j] : corner[k];
+          leader[copy] = copy;
+        }
   }
   std::vector<uint32_t> index(vertex_count);
   first.clear();
@@ -328,7 +347,7 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
     target_settings.outside_bytes += encoding.draco_bytes.size();
     if (settings.mode == RateMode::bpvf) {
       // The rate is of the whole animation: its frames, not the targets, are what a vertex-frame counts, and
-      // its vertices, not the fewer the stream codes (merged copies).
+      // the primitive's vertices, not Draco's (copies merged, seams split).
       target_settings.target = settings.target * double(frame_total) / double(target_count) *
                                double(first.vertex_count) / double(encoding.decoded.vertex_count);
       SEGMORPH_RETURN_IF_ERROR(encode_stream(reordered_targets, target_settings, what, encoding));
@@ -536,7 +555,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       // the decoded file against the original, where vertices Draco merged count once each and the morph-target
       // form adds its rounding (measured: up to 0.3 % above on the samples). Aim a little lower.
       if (settings.mode == RateMode::error) primitive_settings.target *= kErrorTargetMargin;
-      // A rate counts the primitive's vertices, not the fewer the stream codes (merged copies).
+      // A rate counts the primitive's vertices, not Draco's (copies merged, seams split).
       if (settings.mode == RateMode::bpvf)
         primitive_settings.target *= double(frames.clips[0].vertex_count) / double(encoding.decoded.vertex_count);
       SEGMORPH_RETURN_IF_ERROR(encode_stream(in_decoded_order(frames.clips, encoding), primitive_settings, what, encoding));

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstdlib>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -220,8 +219,8 @@ void shorten(double& value) {
   char text[32];
   const std::to_chars_result end = std::to_chars(text, text + sizeof(text), single);
   if (end.ec != std::errc()) return;
-  *end.ptr = '\0';
-  const double shortened = std::strtod(text, nullptr);
+  double shortened = 0;  // read back as a double, independently of the C locale
+  if (std::from_chars(text, end.ptr, shortened).ec != std::errc()) return;
   if (float(shortened) == single) value = shortened;
 }
 

@@ -51,7 +51,7 @@ const char* const kUsage =
     "                     included (it encodes twice: the first encode measures what the rest of the file takes)\n"
     "  --lossless         encode: restore the sampled frames bit for bit\n"
     "  --clusters K       encode: number of motion clusters (default: automatic)\n"
-    "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 30 (default: from\n"
+    "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 22 (default: from\n"
     "                     the error target, at least 12; 14 with --bpvf or --lossless)\n"
     "  --normal-bits B    encode: Draco quantization bits of the base mesh normals, 4 to 16 (default 8)\n"
     "  --texcoord-bits B  encode: Draco quantization bits of the base mesh texture coordinates, 4 to 30\n"
@@ -509,7 +509,9 @@ int run(int argc, char** argv) {
       const bool clusters = arg == "--clusters";
       long low = 4, high = 30;  // --texcoord-bits
       if (clusters) low = 1, high = 65535;
-      if (arg == "--position-bits") low = 8;
+      // Positions: beyond 22 bits the grid is finer than a float resolves across the bounding box (and Draco's
+      // decoded points no longer match their originals; at 30 bits Draco crashed).
+      if (arg == "--position-bits") low = 8, high = 22;
       if (arg == "--normal-bits") high = 16;
       std::string text;
       if (!value(text)) return usage_error(arg + " needs a number");

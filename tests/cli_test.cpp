@@ -98,7 +98,8 @@ TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --error -1").exit_code, 2);
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --clusters 0").exit_code, 2);
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 7").exit_code, 2);
-  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 31").exit_code, 2);
+  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 23").exit_code, 2);
+  EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 30").exit_code, 2);  // crashed
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 12.5").exit_code, 2);
   EXPECT_EQ(run("verify " + sample("Fox/Fox.glb")).exit_code, 2);
 }

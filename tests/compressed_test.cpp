@@ -3,12 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "bake.h"
+#include "comparison.h"
 #include "compressed.h"
+#include "gltf_builder.h"
 #include "gltf_io.h"
 #include "sample.h"
 #include "segmorph_extension.h"
+#include "test_files.h"
 
 namespace segmorph {
 namespace {
@@ -42,6 +46,88 @@ int compressed_node(const tinygltf::Model& model) {
     if (mesh >= 0 && model.meshes[size_t(mesh)].primitives[0].extensions.count(kExtensionName)) return int(n);
   }
   return -1;
+}
+
+// A morph-animated grid of n × n vertices, saved as a .gltf, with `extra` vertices (copies of grid vertices: their
+// positions and target displacements) and `extra_triangles` (indices into grid + extra).
+std::string grid_with_copies(const std::string& name, const std::vector<uint32_t>& copied_from,
+                             const std::vector<uint32_t>& extra_triangles) {
+  const uint32_t n = 8;
+  std::vector<float> positions, target;
+  for (uint32_t j = 0; j < n; ++j)
+    for (uint32_t i = 0; i < n; ++i) {
+      const float x = float(i) / float(n - 1), y = float(j) / float(n - 1);
+      positions.insert(positions.end(), {x, y, 0});
+      target.insert(target.end(), {0, 0.1f * x * y, 0.3f * std::sin(3 * x) * y});
+    }
+  for (uint32_t v : copied_from) {
+    positions.insert(positions.end(), positions.begin() + v * 3, positions.begin() + v * 3 + 3);
+    target.insert(target.end(), target.begin() + v * 3, target.begin() + v * 3 + 3);
+  }
+  std::vector<uint32_t> triangles;
+  for (uint32_t j = 0; j + 1 < n; ++j)
+    for (uint32_t i = 0; i + 1 < n; ++i) {
+      const uint32_t a = j * n + i, b = a + 1, c = a + n, d = c + 1;
+      triangles.insert(triangles.end(), {a, b, d, a, d, c});
+    }
+  triangles.insert(triangles.end(), extra_triangles.begin(), extra_triangles.end());
+  test::GltfBuilder gltf;
+  const int mesh = gltf.add_mesh(gltf.add_vec3(positions),
+                                 gltf.add_uints(triangles, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT));
+  gltf.add_target(mesh, {{"POSITION", gltf.add_vec3(target)}});
+  gltf.model.meshes[size_t(mesh)].weights = {0};
+  const int node = gltf.add_mesh_node(mesh);
+  gltf.add_root(node);
+  std::vector<float> times, weights;
+  for (int k = 0; k <= 10; ++k) times.push_back(float(k) / 10), weights.push_back(std::sin(float(k) / 3));
+  gltf.add_channel(gltf.add_animation(), node, "weights", times, weights);
+  gltf.model.asset.version = "2.0";
+  const std::string path = testing::temporary_path(name);
+  EXPECT_TRUE(save_gltf(gltf.model, path).ok());
+  return path;
+}
+
+// Copies of a vertex are coded once, but never two corners of one triangle: Draco drops a triangle with a repeated
+// vertex, and a vertex only such triangles use would go with it, and its animation (a grid with 400 copies in
+// such triangles measured KG 28 %). Grid 8 × 8 (98 triangles), plus a copy of vertex 0 in a triangle with vertex
+// 0, and three copies of vertex 5 forming a triangle of their own: every triangle and every motion survives.
+TEST(Compressed, CopiesMergeButNeverTwoCornersOfOneTriangle) {
+  const std::string path = grid_with_copies("copies.gltf", {0, 5, 5, 5}, {0, 64, 1, 65, 66, 67});
+  tinygltf::Model model = encoded(path);
+  ASSERT_TRUE(decode_compressed_model(model).ok());
+  size_t triangles = 0;
+  for (const tinygltf::Mesh& mesh : model.meshes)
+    for (const tinygltf::Primitive& primitive : mesh.primitives)
+      if (!primitive.targets.empty()) triangles = size_t(model.accessors[size_t(primitive.indices)].count) / 3;
+  EXPECT_EQ(triangles, 98u + 2u);
+
+  tinygltf::Model original;
+  Scene original_scene, decoded_scene;
+  ASSERT_TRUE(load_gltf(path, original).ok());
+  ASSERT_TRUE(analyze_scene(original, original_scene).ok());
+  std::vector<SampledNode> sampled(original_scene.animated.size());
+  for (size_t i = 0; i < sampled.size(); ++i)
+    ASSERT_TRUE(sample_node(original, original_scene, original_scene.animated[i], SampleSettings(), sampled[i]).ok());
+  ASSERT_TRUE(analyze_scene(model, decoded_scene).ok());
+  AnimationComparison comparison;
+  ASSERT_TRUE(compare_animation(original, original_scene, sampled, model, decoded_scene, comparison).ok());
+  EXPECT_LE(comparison.worst.kg_percent, 0.15);
+}
+
+// A primitive whose vertices are all copies of one still encodes (merged, its one triangle would have none left).
+TEST(Compressed, PrimitiveOfCopiesOnlyEncodes) {
+  test::GltfBuilder gltf;
+  const int mesh = gltf.add_mesh(gltf.add_vec3({1, 2, 3, 1, 2, 3, 1, 2, 3}));
+  gltf.add_target(mesh, {{"POSITION", gltf.add_vec3({0, 0, 1, 0, 0, 1, 0, 0, 1})}});
+  gltf.model.meshes[size_t(mesh)].weights = {0};
+  const int node = gltf.add_mesh_node(mesh);
+  gltf.add_root(node);
+  gltf.add_channel(gltf.add_animation(), node, "weights", {0, 0.5f, 1}, {0, 1, 0});
+  gltf.model.asset.version = "2.0";
+  const std::string path = testing::temporary_path("all_copies.gltf");
+  ASSERT_TRUE(save_gltf(gltf.model, path).ok());
+  tinygltf::Model model = encoded(path);
+  EXPECT_TRUE(decode_compressed_model(model).ok());
 }
 
 // glTF forbids animating a node that has a matrix: the placeholder goes to an empty child made for it.
