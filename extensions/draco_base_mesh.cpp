@@ -126,10 +126,16 @@ Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded,
     if (original.vertex_count) extent = std::max(extent, high - low);
   }
   // Draco's positions are within half a step per axis of the originals; a step is the search radius.
-  const double step = std::max(extent / double((1 << settings.position_bits) - 1), 1e-30);
-  auto cell = [&](const float* p, int c) { return int64_t(std::floor(double(p[c]) / step)); };
+  // A mesh of one point (extent 0) is one cell of any size.
+  const double step = extent > 0 ? extent / double((1 << settings.position_bits) - 1) : 1.0;
+  // Cell coordinates hashed in unsigned arithmetic, and 0 for a cell beyond ±2^62 (or NaN): no overflow for
+  // any float.
+  auto cell = [&](const float* p, int c) {
+    const double q = std::floor(double(p[c]) / step);
+    return q >= -0x1p62 && q <= 0x1p62 ? int64_t(q) : int64_t(0);
+  };
   auto key = [](int64_t x, int64_t y, int64_t z) {
-    return uint64_t(x * 73856093) ^ uint64_t(y * 19349663) ^ uint64_t(z * 83492791);
+    return uint64_t(x) * 73856093u ^ uint64_t(y) * 19349663u ^ uint64_t(z) * 83492791u;
   };
   std::unordered_multimap<uint64_t, uint32_t> grid;
   grid.reserve(original.vertex_count);
