@@ -44,8 +44,9 @@ constexpr double kMotionStepRatioTrials[] = {0.25, 1.0};
 // Lossy steps (residual and motion translation) are at least 2^-kFinestStepBits of the bounding-box diagonal of
 // every position of every frame: finer than float positions resolve, they buy nothing, and they would make the
 // quantized values outgrow int32 (a --bpvf target far above what the frames need got there; so did a primitive
-// whose vertices all sit on one point while it moves, when the scale was the base mesh's diagonal, 0). Quantized motion coefficients are
-// clamped to ±kMaxMotionCoefficient, so that frame-to-frame differences fit in int32 too.
+// whose vertices all sit on one point while it moves, when the scale was the base mesh's diagonal, 0).
+// Quantized motion coefficients are clamped to ±kMaxMotionCoefficient, so that frame-to-frame differences fit
+// in int32 too.
 constexpr int kFinestStepBits = 24;
 constexpr double kMaxMotionCoefficient = double(1 << 29);
 

@@ -95,36 +95,35 @@ Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& p
 // same with one vertex in place of its copies.
 BaseMesh merge_copies(const BaseMesh& base, const std::vector<FrameSequence>& frames, std::vector<uint32_t>& first) {
   const size_t vertex_count = base.vertex_count;
+  // What a vertex is made of, as columns of `width` floats per vertex: each attribute, then each frame's positions.
+  struct Column {
+    const float* values;
+    size_t width;
+  };
+  std::vector<Column> columns;
+  for (const BaseMeshAttribute& attribute : base.attributes)
+    columns.push_back({attribute.values.data(), size_t(attribute.components)});
+  for (const FrameSequence& clip : frames)
+    for (size_t f = 0; f < clip.frame_count; ++f) columns.push_back({clip.frame(f), 3});
   // Each vertex's bits, hashed (FNV-1a over the 32-bit words); equal hashes are compared in full (only distinct
   // vertices whose hashes collide cost more than one comparison).
-  auto for_each_word = [&](size_t v, auto&& visit) {
-    for (const BaseMeshAttribute& attribute : base.attributes)
-      for (int c = 0; c < attribute.components; ++c) visit(attribute.values[v * size_t(attribute.components) + size_t(c)]);
-    for (const FrameSequence& clip : frames)
-      for (size_t f = 0; f < clip.frame_count; ++f)
-        for (int c = 0; c < 3; ++c) visit(clip.frame(f)[v * 3 + size_t(c)]);
-  };
   std::vector<std::pair<uint64_t, uint32_t>> hashed(vertex_count);
   for (size_t v = 0; v < vertex_count; ++v) {
     uint64_t hash = 0xcbf29ce484222325u;
-    for_each_word(v, [&](float x) {
-      uint32_t bits;
-      std::memcpy(&bits, &x, 4);
-      hash = (hash ^ bits) * 0x100000001b3u;
-    });
+    for (const Column& column : columns)
+      for (size_t c = 0; c < column.width; ++c) {
+        uint32_t bits;
+        std::memcpy(&bits, &column.values[v * column.width + c], 4);
+        hash = (hash ^ bits) * 0x100000001b3u;
+      }
     hashed[v] = {hash, uint32_t(v)};
   }
   std::sort(hashed.begin(), hashed.end());
   auto same = [&](uint32_t a, uint32_t b) {
-    for (const BaseMeshAttribute& attribute : base.attributes) {
-      const size_t components = size_t(attribute.components);
-      if (std::memcmp(&attribute.values[a * components], &attribute.values[b * components],
-                      components * sizeof(float)) != 0)
+    for (const Column& column : columns)
+      if (std::memcmp(&column.values[a * column.width], &column.values[b * column.width],
+                      column.width * sizeof(float)) != 0)
         return false;
-    }
-    for (const FrameSequence& clip : frames)
-      for (size_t f = 0; f < clip.frame_count; ++f)
-        if (std::memcmp(clip.frame(f) + a * 3, clip.frame(f) + b * 3, 3 * sizeof(float)) != 0) return false;
     return true;
   };
   std::vector<uint32_t> leader(vertex_count);
