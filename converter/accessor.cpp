@@ -1,6 +1,7 @@
 #include "accessor.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 
@@ -300,12 +301,41 @@ int AccessorWriter::add_indices(const std::vector<uint32_t>& indices) {
   return int(model_.accessors.size()) - 1;
 }
 
+int AccessorWriter::add_described_indices(size_t count, size_t vertex_count) {
+  tinygltf::Accessor accessor;
+  accessor.componentType =
+      vertex_count <= 65535 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+  accessor.count = count;
+  accessor.type = TINYGLTF_TYPE_SCALAR;
+  model_.accessors.push_back(accessor);
+  return int(model_.accessors.size()) - 1;
+}
+
 int AccessorWriter::add_unsigned_shorts(const std::vector<uint16_t>& data, int type, int target) {
   tinygltf::Accessor accessor;
   accessor.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
   accessor.count = data.size() / size_t(components_of_type(type));
   accessor.type = type;
   accessor.bufferView = add_view(data.data(), data.size() * sizeof(uint16_t), target);
+  model_.accessors.push_back(accessor);
+  return int(model_.accessors.size()) - 1;
+}
+
+int AccessorWriter::add_unsigned_integers(const std::vector<uint16_t>& data, int type, int component_type,
+                                          bool normalized, int target) {
+  assert(component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+         component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+  tinygltf::Accessor accessor;
+  accessor.componentType = component_type;
+  accessor.normalized = normalized;
+  accessor.count = data.size() / size_t(components_of_type(type));
+  accessor.type = type;
+  if (component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+    const std::vector<uint8_t> bytes(data.begin(), data.end());
+    accessor.bufferView = add_view(bytes.data(), bytes.size(), target);
+  } else {
+    accessor.bufferView = add_view(data.data(), data.size() * sizeof(uint16_t), target);
+  }
   model_.accessors.push_back(accessor);
   return int(model_.accessors.size()) - 1;
 }

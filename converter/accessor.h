@@ -49,10 +49,19 @@ class AccessorWriter {
   // count × components values in [0, 1] (unsigned) or [−1, 1] (signed) as normalized 16-bit integers, rounded to
   // the nearest, as glTF allows for morph weights and rotations. Values outside the range are clamped.
   int add_normalized_shorts(const float* data, size_t count, int type, bool is_signed);
+  // An index accessor of `count` indices into `vertex_count` vertices with no bufferView: the triangles of a
+  // KHR_draco_mesh_compression primitive, which the extension holds (validators warn about a TRIANGLES primitive
+  // whose vertex count is not a multiple of 3 without one). tinygltf 2.7 refuses such accessors; load_gltf drops
+  // them before it parses (json_prepass.h).
+  int add_described_indices(size_t count, size_t vertex_count);
   // An unsigned-int index accessor (TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER).
   int add_indices(const std::vector<uint32_t>& indices);
   // count × components unsigned shorts of type TINYGLTF_TYPE_* (JOINTS_n, which glTF requires to be integers).
   int add_unsigned_shorts(const std::vector<uint16_t>& data, int type, int target);
+  // count × components unsigned integers of component type UNSIGNED_BYTE or UNSIGNED_SHORT (each value must fit),
+  // normalized or not: JOINTS_n, and WEIGHTS_n stored as normalized integers.
+  int add_unsigned_integers(const std::vector<uint16_t>& data, int type, int component_type, bool normalized,
+                            int target);
   // A bufferView holding `bytes` (for data an extension refers to).
   int add_view(const void* data, size_t bytes, int target);
 

@@ -11,88 +11,10 @@
 #include "normals.h"
 #include "topology.h"
 #include "segmorph_extension.h"
+#include "tracks.h"
 
 namespace segmorph {
-namespace {
 
-int type_of_components(int components) {
-  switch (components) {
-    case 1:
-      return TINYGLTF_TYPE_SCALAR;
-    case 2:
-      return TINYGLTF_TYPE_VEC2;
-    case 3:
-      return TINYGLTF_TYPE_VEC3;
-    default:
-      return TINYGLTF_TYPE_VEC4;
-  }
-}
-
-// The codec's error target relative to the user's (see compress_model).
-constexpr double kErrorTargetMargin = 0.99;
-
-// Kept morph targets (compress_targets): at most kTargetRounds encodes, stopping once the animation's KG is within
-// kTargetsCloseEnough of the goal; the targets' error target moves by at most kTargetsMaxRatio per round and stays
-// below kTargetsMaxError (%), which is reached when the weights hardly use the targets.
-constexpr int kTargetRounds = 8;
-constexpr double kTargetsCloseEnough = 0.93, kTargetsMaxRatio = 3, kTargetsMaxError = 20;
-
-// Draco position bits when none are given: the base mesh's quantization step (its largest extent over 2^bits)
-// about kBaseStepRatio times the residual step the error target implies, and at least kMinPositionBits. The
-// animation's closed loop corrects the base mesh's error in every frame, so the base need not be much finer
-// than the residuals, while a coarser base costs residual bits in every frame: measured on the three
-// sequences at KG 0.5, 0.15 and 0.03 % (docs/codec.md), the best whole file is within a bit of this choice.
-// Rate targets and lossless streams keep Draco's usual 14 bits.
-constexpr int kMinPositionBits = 12, kMaxPositionBits = 24, kDefaultPositionBits = 14;
-constexpr double kBaseStepRatio = 0.25;
-int automatic_position_bits(const std::vector<float>& positions, const std::vector<FrameSequence>& clips,
-                            const CodecSettings& settings) {
-  if (settings.mode != RateMode::error || positions.empty()) return kDefaultPositionBits;
-  float low[3], high[3];
-  bounding_box(positions.data(), positions.size() / 3, low, high);
-  const double extent = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
-  const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio;
-  if (!(extent > 0) || !(step > 0)) return kDefaultPositionBits;
-  const double bits = std::round(std::log2(extent / step + 1));
-  return int(std::clamp(bits, double(kMinPositionBits), double(kMaxPositionBits)));
-}
-
-// One primitive on its way out: its base mesh through Draco, its frames through the codec.
-struct PrimitiveEncoding {
-  DracoSettings draco;
-  std::vector<uint8_t> draco_bytes, stream;
-  DracoPrimitive draco_primitive;
-  BaseMesh decoded;              // the base mesh as a loader gets it back from Draco
-  std::vector<uint32_t> source;  // per decoded vertex, the original vertex it came from
-  EncodeReport report;
-  std::vector<FrameSequence> reconstruction;  // what the stream decodes to, in the decoded vertex order
-};
-
-// Reads every attribute of `primitive` (POSITION first) and its triangles into a base mesh.
-Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
-                      const std::vector<uint32_t>& triangles, size_t vertex_count, const std::string& what,
-                      BaseMesh& base) {
-  base = BaseMesh();
-  base.vertex_count = vertex_count;
-  base.triangles = triangles;
-  for (const auto& [semantic, accessor] : primitive.attributes) {
-    BaseMeshAttribute attribute;
-    attribute.semantic = semantic;
-    SEGMORPH_RETURN_IF_ERROR(
-        read_floats(model, accessor, what + " " + semantic, attribute.values, &attribute.components));
-    if (semantic == "POSITION")
-      base.attributes.insert(base.attributes.begin(), std::move(attribute));
-    else
-      base.attributes.push_back(std::move(attribute));
-  }
-  return Status::Ok();
-}
-
-// Copies of a vertex: vertices whose every base-mesh attribute and every position in `frames` are bit for bit
-// equal. glTF files often store a vertex once per triangle that uses it (the Fox: 1728 vertices, 434 distinct),
-// and Draco codes each copy. Returns the mesh of the distinct vertices, in order of first appearance, with the
-// triangles renumbered; `first[m]` is the first original vertex of distinct vertex m. The primitive plays the
-// same with one vertex in place of its copies.
 BaseMesh merge_copies(const BaseMesh& base, const std::vector<FrameSequence>& frames, std::vector<uint32_t>& first) {
   const size_t vertex_count = base.vertex_count;
   // What a vertex is made of, as columns of `width` floats per vertex: each attribute, then each frame's positions.
@@ -179,6 +101,81 @@ BaseMesh merge_copies(const BaseMesh& base, const std::vector<FrameSequence>& fr
   return merged;
 }
 
+namespace {
+
+int type_of_components(int components) {
+  switch (components) {
+    case 1:
+      return TINYGLTF_TYPE_SCALAR;
+    case 2:
+      return TINYGLTF_TYPE_VEC2;
+    case 3:
+      return TINYGLTF_TYPE_VEC3;
+    default:
+      return TINYGLTF_TYPE_VEC4;
+  }
+}
+
+// The codec's error target relative to the user's (see compress_model).
+constexpr double kErrorTargetMargin = 0.99;
+
+// Kept morph targets (compress_targets): at most kTargetRounds encodes, stopping once the animation's KG is within
+// kTargetsCloseEnough of the goal; the targets' error target moves by at most kTargetsMaxRatio per round and stays
+// below kTargetsMaxError (%), which is reached when the weights hardly use the targets.
+constexpr int kTargetRounds = 8;
+constexpr double kTargetsCloseEnough = 0.93, kTargetsMaxRatio = 3, kTargetsMaxError = 20;
+
+// Draco position bits when none are given: the base mesh's quantization step (its largest extent over 2^bits)
+// about kBaseStepRatio times the residual step the error target implies, and at least kMinPositionBits. The
+// animation's closed loop corrects the base mesh's error in every frame, so the base need not be much finer
+// than the residuals, while a coarser base costs residual bits in every frame: measured on the three
+// sequences at KG 0.5, 0.15 and 0.03 % (docs/codec.md), the best whole file is within a bit of this choice.
+// Rate targets and lossless streams keep Draco's usual 14 bits.
+constexpr int kMinPositionBits = 12, kMaxPositionBits = 24, kDefaultPositionBits = 14;
+constexpr double kBaseStepRatio = 0.25;
+int automatic_position_bits(const std::vector<float>& positions, const std::vector<FrameSequence>& clips,
+                            const CodecSettings& settings) {
+  if (settings.mode != RateMode::error || positions.empty()) return kDefaultPositionBits;
+  float low[3], high[3];
+  bounding_box(positions.data(), positions.size() / 3, low, high);
+  const double extent = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
+  const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio;
+  if (!(extent > 0) || !(step > 0)) return kDefaultPositionBits;
+  const double bits = std::round(std::log2(extent / step + 1));
+  return int(std::clamp(bits, double(kMinPositionBits), double(kMaxPositionBits)));
+}
+
+// One primitive on its way out: its base mesh through Draco, its frames through the codec.
+struct PrimitiveEncoding {
+  DracoSettings draco;
+  std::vector<uint8_t> draco_bytes, stream;
+  DracoPrimitive draco_primitive;
+  BaseMesh decoded;              // the base mesh as a loader gets it back from Draco
+  std::vector<uint32_t> source;  // per decoded vertex, the original vertex it came from
+  EncodeReport report;
+  std::vector<FrameSequence> reconstruction;  // what the stream decodes to, in the decoded vertex order
+};
+
+// Reads every attribute of `primitive` (POSITION first) and its triangles into a base mesh.
+Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                      const std::vector<uint32_t>& triangles, size_t vertex_count, const std::string& what,
+                      BaseMesh& base) {
+  base = BaseMesh();
+  base.vertex_count = vertex_count;
+  base.triangles = triangles;
+  for (const auto& [semantic, accessor] : primitive.attributes) {
+    BaseMeshAttribute attribute;
+    attribute.semantic = semantic;
+    SEGMORPH_RETURN_IF_ERROR(
+        read_floats(model, accessor, what + " " + semantic, attribute.values, &attribute.components));
+    if (semantic == "POSITION")
+      base.attributes.insert(base.attributes.begin(), std::move(attribute));
+    else
+      base.attributes.push_back(std::move(attribute));
+  }
+  return Status::Ok();
+}
+
 // Compresses the base mesh, its copies of a vertex merged (merge_copies over `frames`), and finds which original
 // vertex each vertex Draco gives back stands for; adds the time taken to `milliseconds`.
 Status encode_base(const BaseMesh& base, const std::vector<FrameSequence>& frames, PrimitiveEncoding& out,
@@ -255,16 +252,7 @@ tinygltf::Primitive encoded_primitive(const tinygltf::Primitive& original, const
         attribute.semantic == "POSITION" ? writer.add_described(attribute.values.data(), decoded.vertex_count, type)
                                          : writer.add_zeros(decoded.vertex_count, type, false);
   }
-  // The indices accessor describes Draco's triangles and has no bufferView, as KHR_draco_mesh_compression
-  // asks (validators warn about a TRIANGLES primitive whose vertex count is not a multiple of 3 without
-  // one). tinygltf 2.7 refuses such accessors; load_gltf drops them before it parses (json_prepass.h).
-  tinygltf::Accessor indices;
-  indices.componentType =
-      decoded.vertex_count <= 65535 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
-  indices.count = decoded.triangles.size();
-  indices.type = TINYGLTF_TYPE_SCALAR;
-  model.accessors.push_back(indices);
-  out.indices = int(model.accessors.size()) - 1;
+  out.indices = writer.add_described_indices(decoded.triangles.size(), decoded.vertex_count);
   DracoPrimitive draco = encoding.draco_primitive;
   draco.buffer_view = writer.add_view(encoding.draco_bytes.data(), encoding.draco_bytes.size(), 0);
   out.extensions[kDracoExtensionName] = draco_primitive_value(draco);
@@ -616,6 +604,45 @@ Status compress_targets(tinygltf::Model& model, const std::vector<SampledNode>& 
   return Status::Ok();
 }
 
+// Writes a decoded Draco attribute as plain data into `accessor` (replaced by a new one). Joints become unsigned
+// integers, as glTF requires; normalized integers (weights) stay integers of the type their accessor declares
+// when Draco holds them at that width, so that they still sum exactly; everything else becomes floats.
+Status write_decoded_attribute(const BaseMeshAttribute& attribute, const std::string& what, AccessorWriter& writer,
+                               const tinygltf::Model& model, int& accessor) {
+  const int declared_type = model.accessors[size_t(accessor)].componentType;
+  const bool declared_normalized = model.accessors[size_t(accessor)].normalized;
+  const int type = type_of_components(attribute.components);
+  const size_t count = attribute.values.size() / size_t(attribute.components);
+  const bool joints = attribute.semantic.rfind("JOINTS_", 0) == 0;
+  const int width = attribute.type == AttributeType::uint8 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE
+                                                           : TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+  if (joints || (attribute.type != AttributeType::float32 && attribute.normalized && declared_normalized &&
+                 declared_type == width)) {
+    std::vector<uint16_t> integers(attribute.values.size());
+    for (size_t i = 0; i < integers.size(); ++i) {
+      const float value = attribute.values[i];
+      if (!(value >= 0 && value <= 65535 && value == std::floor(value)))
+        return Status(StatusCode::bad_data, what + ": Draco's " + attribute.semantic + " holds a non-integer");
+      integers[i] = uint16_t(value);
+    }
+    // Joints keep a declared byte width when they fit it.
+    const bool bytes = declared_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+                       std::all_of(integers.begin(), integers.end(), [](uint16_t v) { return v <= 255; });
+    const int component_type = !joints ? width
+                               : bytes ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE
+                                       : TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    accessor = writer.add_unsigned_integers(integers, type, component_type, !joints, TINYGLTF_TARGET_ARRAY_BUFFER);
+    return Status::Ok();
+  }
+  std::vector<float> values = attribute.values;
+  if (attribute.type != AttributeType::float32 && attribute.normalized) {
+    const float top = attribute.type == AttributeType::uint8 ? 255.0f : 65535.0f;
+    for (float& value : values) value /= top;
+  }
+  accessor = writer.add_floats(values.data(), count, type, attribute.semantic == "POSITION", TINYGLTF_TARGET_ARRAY_BUFFER);
+  return Status::Ok();
+}
+
 Status decode_draco_primitives(tinygltf::Model& model) {
   AccessorWriter writer(model);
   for (size_t m = 0; m < model.meshes.size(); ++m)
@@ -644,22 +671,7 @@ Status decode_draco_primitives(tinygltf::Model& model) {
             model.accessors[size_t(accessor->second)].count != decoded.vertex_count)
           return Status(StatusCode::bad_data,
                         what + ": Draco's " + attribute.semantic + " disagrees with its accessor");
-        const int type = type_of_components(attribute.components);
-        if (attribute.semantic.rfind("JOINTS_", 0) == 0) {
-          // glTF requires joints to be unsigned integers (files other tools compress, skinned ones, have them).
-          std::vector<uint16_t> joints(attribute.values.size());
-          for (size_t i = 0; i < joints.size(); ++i) {
-            const float joint = attribute.values[i];
-            if (!(joint >= 0 && joint <= 65535 && joint == std::floor(joint)))
-              return Status(StatusCode::bad_data,
-                            what + ": Draco's " + attribute.semantic + " holds a non-integer joint");
-            joints[i] = uint16_t(joint);
-          }
-          accessor->second = writer.add_unsigned_shorts(joints, type, TINYGLTF_TARGET_ARRAY_BUFFER);
-        } else {
-          accessor->second = writer.add_floats(attribute.values.data(), decoded.vertex_count, type,
-                                               attribute.semantic == "POSITION", TINYGLTF_TARGET_ARRAY_BUFFER);
-        }
+        SEGMORPH_RETURN_IF_ERROR(write_decoded_attribute(attribute, what, writer, model, accessor->second));
       }
       if (primitive.indices >= 0 && (size_t(primitive.indices) >= model.accessors.size() ||
                                      model.accessors[size_t(primitive.indices)].count != decoded.triangles.size()))
@@ -676,6 +688,7 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
   SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(model));
   if (!declares_extension(model, kExtensionName)) return Status::Ok();
   DecodedSizes found;
+  SEGMORPH_RETURN_IF_ERROR(decode_tracks_in_model(model, &found.animation_bytes, &found.coded_animations));
 
   Scene scene;
   for (size_t a = 0; a < model.animations.size(); ++a) {

@@ -148,7 +148,7 @@ void for_each_accessor_ref(tinygltf::Model& model, F f) {
 }
 
 // Calls f(bufferView index&) for the bufferViews that KHR_draco_mesh_compression and
-// SEGMORPH_animation_compression name on primitives.
+// SEGMORPH_animation_compression name on primitives, and SEGMORPH_animation_compression on animations.
 template <typename F>
 void for_each_extension_view(tinygltf::Model& model, F f) {
   for (tinygltf::Mesh& mesh : model.meshes)
@@ -167,6 +167,14 @@ void for_each_extension_view(tinygltf::Model& model, F f) {
         draco_it->second = draco_primitive_value(draco);
       }
     }
+  for (tinygltf::Animation& animation : model.animations) {
+    auto it = animation.extensions.find(kExtensionName);
+    CompressedAnimation coded;
+    if (it != animation.extensions.end() && parse_compressed_animation(it->second, coded).ok()) {
+      f(coded.buffer_view);
+      it->second = compressed_animation_value(coded);
+    }
+  }
 }
 
 uint32_t read_u32(const unsigned char* p) {
@@ -211,11 +219,19 @@ Status prepare_for_tinygltf(bool binary, std::string& bytes) {
 // A double that holds a float exactly (as the numbers of most glTF files do: they were floats in the exporter)
 // becomes the double nearest the shortest decimal that reads back as that float, which the JSON writer prints
 // in those few digits: 0.9999998807907104 becomes 0.99999988. Readers that take the number as a float get the
-// same float; those that keep doubles get it within half a float's last digit, as the exporter meant it. A double
-// that is not a float (a georeferenced translation, say) is left as it is.
+// same float; those that keep doubles get it within half a float's last digit, as the exporter meant it. So does
+// a float an exporter printed in 15 significant digits (three.js: -0.707106828689575 for the float
+// -0.70710682868957519...): the double agrees with the float to those 15 digits. Any other double (a
+// georeferenced translation, say) is left as it is.
 void shorten(double& value) {
   const float single = float(value);
-  if (!(double(single) == value) || !std::isfinite(single)) return;
+  if (!std::isfinite(single)) return;
+  if (double(single) != value) {
+    char as_double[32], as_float[32];
+    std::snprintf(as_double, sizeof(as_double), "%.15g", value);
+    std::snprintf(as_float, sizeof(as_float), "%.15g", double(single));
+    if (std::strcmp(as_double, as_float) != 0) return;
+  }
   char text[32];
   const std::to_chars_result end = std::to_chars(text, text + sizeof(text), single);
   if (end.ec != std::errc()) return;
@@ -322,12 +338,21 @@ void repack(tinygltf::Model& model) {
   model.meshes = select(model.meshes, meshes);
   model.skins = select(model.skins, skins);
 
-  // Animation samplers in use, per animation.
+  // Animation samplers in use, per animation (a coded one is: its stream holds it).
   for (tinygltf::Animation& animation : model.animations) {
     Remap samplers(animation.samplers.size());
     for (const tinygltf::AnimationChannel& channel : animation.channels) samplers.keep(channel.sampler);
+    auto coded_it = animation.extensions.find(kExtensionName);
+    CompressedAnimation coded;
+    const bool is_coded = coded_it != animation.extensions.end() && parse_compressed_animation(coded_it->second, coded).ok();
+    if (is_coded)
+      for (int sampler : coded.samplers) samplers.keep(sampler);
     samplers.finish();
     for (tinygltf::AnimationChannel& channel : animation.channels) channel.sampler = samplers(channel.sampler);
+    if (is_coded) {
+      for (int& sampler : coded.samplers) sampler = samplers(sampler);
+      coded_it->second = compressed_animation_value(coded);
+    }
     animation.samplers = select(animation.samplers, samplers);
   }
 

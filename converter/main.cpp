@@ -10,6 +10,8 @@
 #include "compressed.h"
 #include "gltf_io.h"
 #include "metrics.h"
+#include "moving_meshes.h"
+#include "tracks.h"
 #include "sample.h"
 #include "topology.h"
 
@@ -29,13 +31,15 @@ const char* const kUsage =
     "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
     "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
-    "         [--normal-bits B] [--texcoord-bits B] [--targets auto|keep|bake] [--json]\n"
+    "         [--normal-bits B] [--texcoord-bits B] [--skins keep|bake] [--targets auto|keep|bake] [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
     "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
-    "      (see --targets). Default target: --error 0.15 (KG error in %).\n"
+    "      (see --targets); a skinned mesh keeps its skin (see --skins). Meshes that animated nodes move\n"
+    "      are compressed with Draco, and translation, rotation and scale tracks are coded (the extension\n"
+    "      is then required). Default target: --error 0.15 (KG error in %).\n"
     "  decode IN -o OUT\n"
-    "      Restore standard glTF from an encoded file: morph targets in the form bake writes, or a mesh's\n"
-    "      kept morph targets, played by its own weights animation.\n"
+    "      Restore standard glTF from an encoded file: morph targets in the form bake writes, a mesh's kept\n"
+    "      morph targets played by its own weights animation, kept skins, plain meshes and float tracks.\n"
     "  verify ORIGINAL COMPRESSED [--json]\n"
     "      Compare the animation of two files (either may be encoded, baked, original or written by another\n"
     "      tool: primitives and vertices are paired by trajectory, COMPRESSED is sampled at ORIGINAL's frame\n"
@@ -56,6 +60,9 @@ const char* const kUsage =
     "  --normal-bits B    encode: Draco quantization bits of the base mesh normals, 4 to 16 (default 8)\n"
     "  --texcoord-bits B  encode: Draco quantization bits of the base mesh texture coordinates, 4 to 30\n"
     "                     (default 12)\n"
+    "  --skins MODE       encode: what a skinned mesh (without morph targets) stores. keep (default): its\n"
+    "                     skin, the mesh compressed with Draco and the joints' tracks coded; bake: its\n"
+    "                     sampled frames, for runtimes without skinning. --bpvf and --lossless bake\n"
     "  --targets MODE     encode: what a morph-target mesh (unskinned, one node) stores. keep: its targets,\n"
     "                     compressed, played by its own weights animation; bake: its sampled frames, like a\n"
     "                     skinned mesh. auto (default): where a mesh has at most half as many targets as\n"
@@ -77,6 +84,7 @@ struct Options {
   DracoSettings draco;  // position_bits 0: compress_model chooses them
   bool rate_given = false;
   enum class Targets { automatic, keep, bake } targets = Targets::automatic;
+  enum class Skins { keep, bake } skins = Skins::keep;
   bool json = false;
   bool quiet = false;
 };
@@ -279,16 +287,115 @@ double vertex_frames(const std::vector<SampledNode>& sampled) {
 }
 
 // Encodes a copy of file's model with `codec`: the nodes `keep` marks keep their morph targets, the others are baked.
+// Whether encode keeps the skin of `node` (see --skins): a skinned mesh without morph targets, with an error
+// target (a kept skin's error is searched for; --bpvf rate control and --lossless are the codec's, on baked frames).
+bool keeps_skin(const AnimatedNode& node, const Options& options) {
+  return options.skins == Options::Skins::keep && options.codec.mode == RateMode::error && node.skin >= 0 &&
+         !node.morphed;
+}
+
+// Draco's share of the KG error target in the meshes compress_moving_meshes takes.
+constexpr double kMovingMeshErrorShare = 0.6;
+// The tracks' quantization distance (TrackPrecision) where nothing measured depends on it: this fraction of the
+// error target times the scene's diagonal, about what the search below settles on for kept skins.
+constexpr double kTrackDistanceRatio = 0.25;
+// The search for kept skins: KG within kSearchGoal of the target; a bracket in at most kSearchBracketRounds
+// doublings or halvings, then kSearchHalvings bisections of it (in log distance).
+constexpr double kSearchGoal = 0.99;
+constexpr int kSearchBracketRounds = 8, kSearchHalvings = 4;
+
+// The worst KG error (%) of `encoded` against the file it was encoded from, as verify measures it.
+Status measured_kg(const SampledFile& file, tinygltf::Model encoded, double& kg) {
+  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(encoded));
+  Scene scene;
+  SEGMORPH_RETURN_IF_ERROR(analyze_scene(encoded, scene));
+  AnimationComparison comparison;
+  SEGMORPH_RETURN_IF_ERROR(compare_animation(file.model, file.scene, file.sampled, encoded, scene, comparison));
+  kg = comparison.worst.kg_percent;
+  return Status::Ok();
+}
+
+// Codes the tracks of `out.model` (whose kept skins depend on them): with --error, the coarsest quantization
+// distance (a factor of 2 apart, then halved 4 times) whose measured KG is within the target; otherwise the rule
+// of kTrackDistanceRatio.
+Status encode_tracks_for(const SampledFile& file, const CodecSettings& codec, bool measured, const Options& options,
+                         Encoded& out) {
+  const double error = codec.mode == RateMode::error ? codec.target : CodecSettings().target;
+  const double first = kTrackDistanceRatio * error / 100 * scene_diagonal(out.model);
+  auto encode = [&](double distance, Encoded& result, TrackReport& report) {
+    result.model = out.model;
+    report = TrackReport();
+    return compress_tracks(result.model, TrackPrecision{distance}, report);
+  };
+  TrackReport report;
+  if (!measured || codec.mode != RateMode::error) {
+    SEGMORPH_RETURN_IF_ERROR(encode(first, out, report));
+    out.report.animation_bytes += report.bytes;
+    return Status::Ok();
+  }
+  const double goal = kSearchGoal * codec.target;
+  Encoded candidate;
+  double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
+  auto within_goal = [&](double distance, bool& ok) {
+    SEGMORPH_RETURN_IF_ERROR(encode(distance, candidate, report));
+    SEGMORPH_RETURN_IF_ERROR(measured_kg(file, candidate.model, kg));
+    ok = kg <= goal;
+    return Status::Ok();
+  };
+  bool ok = false;
+  double distance = first;
+  for (int round = 0; round < kSearchBracketRounds; ++round) {
+    SEGMORPH_RETURN_IF_ERROR(within_goal(distance, ok));
+    (ok ? within : beyond) = distance;
+    if (within > 0 && beyond > 0) break;
+    distance = ok ? distance * 2 : distance / 2;
+  }
+  if (within == 0) {
+    char line[160];
+    std::snprintf(line, sizeof(line), "warning: the kept skins' error stays at KG %.4f %% with the finest tracks tried", kg);
+    progress(options, line);
+    within = distance;  // the finest tried
+  }
+  for (int round = 0; beyond > 0 && round < kSearchHalvings; ++round) {
+    distance = std::sqrt(within * beyond);
+    SEGMORPH_RETURN_IF_ERROR(within_goal(distance, ok));
+    (ok ? within : beyond) = distance;
+  }
+  SEGMORPH_RETURN_IF_ERROR(encode(within, out, report));
+  out.report.animation_bytes += report.bytes;
+  return Status::Ok();
+}
+
+// Encodes a copy of file's model with `codec`: the nodes `keep` marks keep their morph targets, skinned nodes whose
+// skin is kept are compressed with the meshes that move rigidly, the others are baked; then the tracks are coded.
 Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep, const CodecSettings& codec,
                          const Options& options, Encoded& out) {
   out.model = file.model;
   out.report = CompressReport();
   std::vector<SampledNode> kept, baked;
-  for (size_t i = 0; i < file.sampled.size(); ++i) (keep[i] ? kept : baked).push_back(file.sampled[i]);
+  std::vector<int> kept_skins;
+  for (size_t i = 0; i < file.sampled.size(); ++i) {
+    if (keeps_skin(*file.sampled[i].node, options)) kept_skins.push_back(file.sampled[i].node->node);
+    else (keep[i] ? kept : baked).push_back(file.sampled[i]);
+  }
   const auto report_progress = [&](const std::string& message) { progress(options, message); };
   SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, codec, options.draco, out.report, report_progress));
   SEGMORPH_RETURN_IF_ERROR(bake_model(out.model, file.scene, baked));
-  return compress_model(out.model, baked, codec, options.draco, out.report, report_progress);
+  SEGMORPH_RETURN_IF_ERROR(compress_model(out.model, baked, codec, options.draco, out.report, report_progress));
+  if (codec.mode == RateMode::lossless) return Status::Ok();
+  // Draco's RMS error is half its step: a step of 2 × share × E / 100 of a mesh's spread is its share of KG E %.
+  const double error = codec.mode == RateMode::error ? codec.target : CodecSettings().target;
+  const double step_ratio = 2 * kMovingMeshErrorShare * error / 100;
+  MovingMeshReport meshes;
+  // A rigid part's error counts against the whole it belongs to: a figure's spread is about a quarter of its
+  // diagonal.
+  const double rigid_spread = scene_diagonal(out.model) / 4;
+  SEGMORPH_RETURN_IF_ERROR(compress_moving_meshes(out.model, moving_meshes(out.model, kept_skins), options.draco,
+                                                  step_ratio, rigid_spread, meshes));
+  out.report.draco_bytes += meshes.bytes;
+  progress(options, kept_skins.empty() ? "coding the animation tracks"
+                                       : "coding the animation tracks, measuring the kept skins' error");
+  return encode_tracks_for(file, codec, !kept_skins.empty(), options, out);
 }
 
 // encode_model_once, and with --bpvf a second time: the rate is of the whole file, and the codec budgets only its
@@ -418,13 +525,15 @@ int run_decode(const Options& options) {
   DecodedSizes sizes;
   if (status.ok()) status = decode_compressed_model(model, &sizes);
   if (!status.ok()) return fail(path, status);
-  if (sizes.primitives == 0)
-    return fail(path,
-                Status(StatusCode::nothing_to_do, "not encoded: it has no SEGMORPH_animation_compression primitive"));
+  if (sizes.primitives == 0 && sizes.coded_animations == 0)
+    return fail(path, Status(StatusCode::nothing_to_do,
+                             "not encoded: it has no SEGMORPH_animation_compression primitive or animation"));
   progress(options, "writing " + options.output);
   status = save_gltf(model, options.output);
   if (!status.ok()) return fail(options.output, status);
-  progress(options, "decoded " + std::to_string(sizes.primitives) + " primitive" + (sizes.primitives == 1 ? "" : "s"));
+  progress(options, "decoded " + std::to_string(sizes.primitives) + " primitive" + (sizes.primitives == 1 ? "" : "s") +
+                        " and the tracks of " + std::to_string(sizes.coded_animations) + " animation" +
+                        (sizes.coded_animations == 1 ? "" : "s"));
   return 0;
 }
 
@@ -528,6 +637,15 @@ int run(int argc, char** argv) {
         options.draco.normal_bits = int(number);
       else
         options.draco.texcoord_bits = int(number);
+    } else if (arg == "--skins") {
+      std::string text;
+      if (!value(text)) return usage_error("--skins needs keep or bake");
+      if (text == "keep")
+        options.skins = Options::Skins::keep;
+      else if (text == "bake")
+        options.skins = Options::Skins::bake;
+      else
+        return usage_error("--skins takes keep or bake, not '" + text + "'");
     } else if (arg == "--targets") {
       std::string text;
       if (!value(text)) return usage_error("--targets needs auto, keep or bake");

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <queue>
 #include <unordered_map>
@@ -21,6 +22,40 @@ draco::GeometryAttribute::Type draco_type(const std::string& semantic) {
   return draco::GeometryAttribute::GENERIC;
 }
 
+int add_float_attribute(draco::Mesh& mesh, const BaseMeshAttribute& attribute) {
+  draco::GeometryAttribute geometry;
+  geometry.Init(draco_type(attribute.semantic), nullptr, int8_t(attribute.components), draco::DT_FLOAT32, false,
+                int64_t(sizeof(float)) * attribute.components, 0);
+  const size_t count = attribute.values.size() / size_t(attribute.components);
+  const int id = mesh.AddAttribute(geometry, true, uint32_t(count));
+  draco::PointAttribute* point_attribute = mesh.attribute(id);
+  for (size_t v = 0; v < count; ++v)
+    point_attribute->SetAttributeValue(draco::AttributeValueIndex(uint32_t(v)),
+                                       &attribute.values[v * size_t(attribute.components)]);
+  return id;
+}
+
+// An integer attribute, which Draco codes exactly (its quantization is for floats); -1 when a value is not an
+// integer of type T.
+template <typename T>
+int add_integer_attribute(draco::Mesh& mesh, const BaseMeshAttribute& attribute) {
+  for (float value : attribute.values)
+    if (!(value >= 0 && value <= float(std::numeric_limits<T>::max()) && value == std::floor(value))) return -1;
+  draco::GeometryAttribute geometry;
+  geometry.Init(draco::GeometryAttribute::GENERIC, nullptr, int8_t(attribute.components),
+                sizeof(T) == 1 ? draco::DT_UINT8 : draco::DT_UINT16, attribute.normalized,
+                int64_t(sizeof(T)) * attribute.components, 0);
+  const size_t count = attribute.values.size() / size_t(attribute.components);
+  const int id = mesh.AddAttribute(geometry, true, uint32_t(count));
+  draco::PointAttribute* point_attribute = mesh.attribute(id);
+  T element[4];
+  for (size_t v = 0; v < count; ++v) {
+    for (int c = 0; c < attribute.components; ++c) element[c] = T(attribute.values[v * size_t(attribute.components) + size_t(c)]);
+    point_attribute->SetAttributeValue(draco::AttributeValueIndex(uint32_t(v)), element);
+  }
+  return id;
+}
+
 }  // namespace
 
 Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& settings, std::vector<uint8_t>& bytes,
@@ -32,15 +67,12 @@ Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& setting
     if (attribute.components < 1 || attribute.components > 4 ||
         attribute.values.size() != mesh.vertex_count * size_t(attribute.components))
       return Status(StatusCode::invalid_argument, "base mesh attribute " + attribute.semantic + " has the wrong size");
-    draco::GeometryAttribute geometry;
-    geometry.Init(draco_type(attribute.semantic), nullptr, int8_t(attribute.components), draco::DT_FLOAT32, false,
-                  int64_t(sizeof(float)) * attribute.components, 0);
-    const int id = draco_mesh.AddAttribute(geometry, true, uint32_t(mesh.vertex_count));
-    draco::PointAttribute* point_attribute = draco_mesh.attribute(id);
-    for (size_t v = 0; v < mesh.vertex_count; ++v)
-      point_attribute->SetAttributeValue(draco::AttributeValueIndex(uint32_t(v)),
-                                         &attribute.values[v * size_t(attribute.components)]);
-    attribute_ids[attribute.semantic] = int(point_attribute->unique_id());
+    const int id = attribute.type == AttributeType::float32 ? add_float_attribute(draco_mesh, attribute)
+                   : attribute.type == AttributeType::uint8  ? add_integer_attribute<uint8_t>(draco_mesh, attribute)
+                                                             : add_integer_attribute<uint16_t>(draco_mesh, attribute);
+    if (id < 0)
+      return Status(StatusCode::invalid_argument, "base mesh attribute " + attribute.semantic + " holds a value its type cannot");
+    attribute_ids[attribute.semantic] = int(draco_mesh.attribute(id)->unique_id());
   }
   draco_mesh.SetNumFaces(mesh.triangles.size() / 3);
   for (size_t t = 0; t < mesh.triangles.size() / 3; ++t) {
@@ -53,6 +85,13 @@ Status encode_draco_base_mesh(const BaseMesh& mesh, const DracoSettings& setting
     draco_mesh.SetFace(draco::FaceIndex(uint32_t(t)), face);
   }
 
+  if (settings.share_values) {
+    // Sharing values maps points to values through a table that only the mesh's own (not the attributes')
+    // deduplication keeps consistent; points equal in every value become one.
+    if (!draco_mesh.DeduplicateAttributeValues())
+      return Status(StatusCode::numerical, "Draco could not share the base mesh's attribute values");
+    draco_mesh.DeduplicatePointIds();
+  }
   draco::Encoder encoder;
   encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, settings.position_bits);
   encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, settings.normal_bits);
@@ -88,10 +127,24 @@ Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<s
     out.components = attribute->num_components();
     if (out.components < 1 || out.components > 4) return Status(StatusCode::bad_data, "Draco attribute " + semantic + " has a bad size");
     out.values.resize(mesh.vertex_count * size_t(out.components));
-    for (uint32_t v = 0; v < mesh.vertex_count; ++v)
-      if (!attribute->ConvertValue<float>(attribute->mapped_index(draco::PointIndex(v)), int8_t(out.components),
-                                          &out.values[size_t(v) * size_t(out.components)]))
-        return Status(StatusCode::bad_data, "Draco attribute " + semantic + " cannot be read as floats");
+    // Unsigned integers of 8 and 16 bits are read as they are (their integers); every other type as floats.
+    const draco::DataType data_type = attribute->data_type();
+    if (data_type == draco::DT_UINT8 || data_type == draco::DT_UINT16) {
+      out.type = data_type == draco::DT_UINT8 ? AttributeType::uint8 : AttributeType::uint16;
+      out.normalized = attribute->normalized();
+      uint16_t element[4];
+      for (uint32_t v = 0; v < mesh.vertex_count; ++v) {
+        if (!attribute->ConvertValue<uint16_t>(attribute->mapped_index(draco::PointIndex(v)), int8_t(out.components),
+                                               element))
+          return Status(StatusCode::bad_data, "Draco attribute " + semantic + " cannot be read as integers");
+        for (int c = 0; c < out.components; ++c) out.values[size_t(v) * size_t(out.components) + size_t(c)] = element[c];
+      }
+    } else {
+      for (uint32_t v = 0; v < mesh.vertex_count; ++v)
+        if (!attribute->ConvertValue<float>(attribute->mapped_index(draco::PointIndex(v)), int8_t(out.components),
+                                            &out.values[size_t(v) * size_t(out.components)]))
+          return Status(StatusCode::bad_data, "Draco attribute " + semantic + " cannot be read as floats");
+    }
     if (semantic == "POSITION") mesh.attributes.insert(mesh.attributes.begin(), std::move(out));
     else mesh.attributes.push_back(std::move(out));
   }

@@ -11,10 +11,17 @@
 
 namespace segmorph {
 
+// How Draco stores an attribute: floats, quantized with the bits of their kind (DracoSettings), or unsigned
+// integers, kept exactly (JOINTS_n; WEIGHTS_n as normalized integers). For integer types `values` hold the
+// integers themselves (exact in a float up to 2^24), whether or not they are normalized.
+enum class AttributeType { float32, uint8, uint16 };
+
 struct BaseMeshAttribute {
   std::string semantic;       // glTF attribute name: POSITION, NORMAL, TANGENT, TEXCOORD_n, COLOR_n, _NAME
   int components = 0;         // 1 to 4
   std::vector<float> values;  // V × components
+  AttributeType type = AttributeType::float32;
+  bool normalized = false;  // integer types: the value read is the integer over its type's maximum
 };
 
 struct BaseMesh {
@@ -38,6 +45,9 @@ struct DracoSettings {
   // Draco's sequential encoding keeps the vertex order but compresses several times worse than edgebreaker,
   // which reorders (and may merge) vertices; match_decoded_vertices maps them back.
   bool keep_order = false;
+  // Draco stores each distinct value of an attribute once, with a map from points to values: a mesh whose vertices
+  // are split along seams (flat shading, texture seams) then codes the positions they share once.
+  bool share_values = false;
 };
 
 // Encodes `mesh` into `bytes` (edgebreaker, or sequential when settings.keep_order). `attribute_ids` receives, per semantic, the Draco

@@ -64,6 +64,26 @@ Status parse_draco_primitive(const tinygltf::Value& value, DracoPrimitive& out) 
   return Status::Ok();
 }
 
+Status parse_compressed_animation(const tinygltf::Value& value, CompressedAnimation& out) {
+  const std::string object = std::string(kExtensionName) + " (animation)";
+  out = CompressedAnimation();
+  if (!get_index(value, "bufferView", out.buffer_view)) return missing(object, "bufferView");
+  if (!value.Has("samplers") || !value.Get("samplers").IsArray() || value.Get("samplers").ArrayLen() == 0)
+    return missing(object, "samplers");
+  const tinygltf::Value& samplers = value.Get("samplers");
+  for (size_t i = 0; i < samplers.ArrayLen(); ++i) {
+    const tinygltf::Value& item = samplers.Get(int(i));
+    if (!item.IsNumber() || !(item.GetNumberAsDouble() >= 0) || item.GetNumberAsDouble() > 2147483647.0 ||
+        item.GetNumberAsDouble() != double(int(item.GetNumberAsDouble())))
+      return Status(StatusCode::bad_data, object + ": \"samplers\" must hold sampler indices");
+    const int sampler = int(item.GetNumberAsDouble());
+    if (std::find(out.samplers.begin(), out.samplers.end(), sampler) != out.samplers.end())
+      return Status(StatusCode::bad_data, object + ": sampler " + std::to_string(sampler) + " is listed twice");
+    out.samplers.push_back(sampler);
+  }
+  return Status::Ok();
+}
+
 bool is_placeholder_channel(const tinygltf::AnimationChannel& channel) {
   const auto it = channel.extensions.find(kExtensionName);
   return it != channel.extensions.end() && it->second.IsObject() && it->second.Has("placeholder") &&
@@ -94,6 +114,15 @@ tinygltf::Value draco_primitive_value(const DracoPrimitive& primitive) {
   tinygltf::Value::Object object;
   object["bufferView"] = tinygltf::Value(primitive.buffer_view);
   object["attributes"] = tinygltf::Value(std::move(attributes));
+  return tinygltf::Value(std::move(object));
+}
+
+tinygltf::Value compressed_animation_value(const CompressedAnimation& animation) {
+  tinygltf::Value::Array samplers;
+  for (int sampler : animation.samplers) samplers.emplace_back(sampler);
+  tinygltf::Value::Object object;
+  object["bufferView"] = tinygltf::Value(animation.buffer_view);
+  object["samplers"] = tinygltf::Value(std::move(samplers));
   return tinygltf::Value(std::move(object));
 }
 

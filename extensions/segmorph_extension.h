@@ -9,6 +9,9 @@
 //                    "interpolation": "LINEAR" } ] }   or "STEP"
 // or, on a primitive that keeps its morph targets (their data is the stream's; the weights animation is kept):
 //   "SEGMORPH_animation_compression": { "bufferView": 12, "morphTargets": true }
+// On an animation whose keyframe samplers are coded (their input and output accessors have no data; the track stream
+// fills them, spec/tracks.md):
+//   "SEGMORPH_animation_compression": { "bufferView": 14, "samplers": [0, 1, 2] }
 // On an animation channel that exists only so that its animation is not empty:
 //   "SEGMORPH_animation_compression": { "placeholder": true }
 #pragma once
@@ -39,6 +42,11 @@ struct CompressedPrimitive {
   bool morph_targets = false;
 };
 
+struct CompressedAnimation {
+  int buffer_view = -1;
+  std::vector<int> samplers;  // the coded samplers, in stream order; at least one, each once
+};
+
 struct DracoPrimitive {
   int buffer_view = -1;
   std::map<std::string, int> attributes;  // semantic → Draco attribute id
@@ -47,10 +55,12 @@ struct DracoPrimitive {
 // Parse the extension objects; bad_data with a one-line message when a member is missing or of the wrong type.
 Status parse_compressed_primitive(const tinygltf::Value& value, CompressedPrimitive& out);
 Status parse_draco_primitive(const tinygltf::Value& value, DracoPrimitive& out);
+Status parse_compressed_animation(const tinygltf::Value& value, CompressedAnimation& out);
 bool is_placeholder_channel(const tinygltf::AnimationChannel& channel);
 
 tinygltf::Value compressed_primitive_value(const CompressedPrimitive& primitive);
 tinygltf::Value draco_primitive_value(const DracoPrimitive& primitive);
+tinygltf::Value compressed_animation_value(const CompressedAnimation& animation);
 tinygltf::Value placeholder_value();
 
 // Adds `name` to extensionsUsed (and extensionsRequired when `required`), once; or removes it from both.

@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "gltf_io.h"
 #include "test_files.h"
 
 namespace {
@@ -289,7 +290,7 @@ TEST(Cli, AutomaticClusterCountIsNearTheBestFixedOne) {
 TEST(Cli, CopiesOfAVertexAreCodedOnce) {
   const std::string directory = output_directory("vertex_copies");
   const std::string input = sample("Fox/Fox.glb"), encoded = directory + "/fox.glb", decoded = directory + "/plain.glb";
-  Result result = run("encode -q " + input + " -o " + encoded + " --json");
+  Result result = run("encode -q " + input + " -o " + encoded + " --skins bake --json");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_LT(json_number(result.out, "draco_bytes"), 4000);  // 10950 with every copy
   ASSERT_EQ(run("decode -q " + encoded + " -o " + decoded).exit_code, 0);
@@ -344,7 +345,7 @@ TEST(Cli, DracoIndicesWithoutBufferViewAreRead) {
 // Two clips of a compressed primitive naming one animation would make decode write an invalid file.
 TEST(Cli, ClipsNamingOneAnimationTwiceAreRefused) {
   const std::string directory = output_directory("clips_twice");
-  ASSERT_EQ(run("encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/fox.gltf --error 1").exit_code, 0);
+  ASSERT_EQ(run("encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/fox.gltf --error 1 --skins bake").exit_code, 0);
   std::string json = read_text(directory + "/fox.gltf");
   const size_t second = json.find("\"animation\": 1,", json.find("SEGMORPH_animation_compression\": {"));
   ASSERT_NE(second, std::string::npos);
@@ -356,7 +357,7 @@ TEST(Cli, ClipsNamingOneAnimationTwiceAreRefused) {
 TEST(Cli, EncodeDecodeAndVerify) {
   const std::string directory = output_directory("encode");
   const std::string input = sample("Fox/Fox.glb");
-  Result result = run("encode -q " + input + " -o " + directory + "/fox.glb --error 0.5 --json");
+  Result result = run("encode -q " + input + " -o " + directory + "/fox.glb --error 0.5 --skins bake --json");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_GT(json_number(result.out, "clusters"), 0);
   EXPECT_LE(json_number(result.out, "e_pi"), json_number(result.out, "e_pi_before_refinement"));
@@ -535,3 +536,84 @@ TEST(Cli, InfoReportsPrimitivesAndClips) {
 }
 
 }  // namespace
+
+// A skinned mesh keeps its skin by default: Draco holds the mesh with its joints and weights, the joints' tracks are
+// coded (the extension is then required), and the file is smaller than the baked one at the same error target.
+// decode restores a plain skinned file that plays exactly what verify measured on the encoded one.
+TEST(Cli, SkinsAreKeptAndTracksCoded) {
+  const std::string directory = output_directory("kept_skin");
+  const std::string input = sample("Fox/Fox.glb"), kept = directory + "/kept.gltf", baked = directory + "/baked.glb",
+                    decoded = directory + "/decoded.gltf";
+  Result result = run("encode -q " + input + " -o " + kept + " --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(json_number(result.out, "primitives"), 0);  // no frame stream
+  const std::string json = read_text(kept);
+  EXPECT_NE(json.find("\"JOINTS_0\""), std::string::npos);
+  EXPECT_NE(json.find("\"skins\""), std::string::npos);
+  const size_t required = json.find("\"extensionsRequired\"");
+  ASSERT_NE(required, std::string::npos);
+  EXPECT_NE(json.find("SEGMORPH_animation_compression", required), std::string::npos);
+  EXPECT_NE(json.find("\"samplers\": ["), std::string::npos);  // an animation's coded samplers
+  ASSERT_EQ(run("encode -q " + input + " -o " + baked + " --skins bake").exit_code, 0);
+  ASSERT_EQ(run("encode -q " + input + " -o " + directory + "/kept.glb").exit_code, 0);
+  EXPECT_LT(fs::file_size(directory + "/kept.glb"), fs::file_size(baked));
+
+  result = run("verify -q " + input + " " + kept + " --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const double kg = json_number(result.out, "kg_percent");
+  EXPECT_LE(kg, 0.15);
+  EXPECT_GT(kg, 0.05);  // the search spends the error budget
+  EXPECT_EQ(json_number(result.out, "vertices"), 1728);
+
+  result = run("decode -q " + kept + " -o " + decoded);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const std::string plain = read_text(decoded);
+  EXPECT_EQ(plain.find("SEGMORPH_animation_compression"), std::string::npos);
+  EXPECT_EQ(plain.find("KHR_draco_mesh_compression"), std::string::npos);
+  EXPECT_NE(plain.find("\"skins\""), std::string::npos);
+  result = run("verify -q " + input + " " + decoded + " --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_DOUBLE_EQ(json_number(result.out, "kg_percent"), kg);
+}
+
+// Tracks that hold their node's rest value are dropped, others coded; --skins bake and --lossless bake as before.
+TEST(Cli, SkinsOption) {
+  const std::string directory = output_directory("skins_option");
+  EXPECT_EQ(run("encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/x.glb --skins maybe").exit_code, 2);
+  EXPECT_EQ(run("encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/x.glb --skins").exit_code, 2);
+  Result result = run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory +
+                      "/baked.glb --skins bake --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(json_number(result.out, "primitives"), 1);
+  result = run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory + "/lossless.glb --lossless --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(json_number(result.out, "primitives"), 1);
+}
+
+// A coded animation that disagrees with its stream, or whose stream is damaged, is refused in one line.
+TEST(Cli, DamagedTrackStreamsAreRefused) {
+  const std::string directory = output_directory("damaged_tracks");
+  const std::string encoded = directory + "/fox.gltf";
+  ASSERT_EQ(run("encode -q " + sample("Fox/Fox.glb") + " -o " + encoded).exit_code, 0);
+  const std::string json = read_text(encoded);
+  const size_t list = json.find("\"samplers\": [");
+  ASSERT_NE(list, std::string::npos);
+
+  std::string bad = json;
+  bad.replace(list, 13, "\"samplers\": [99, ");
+  write_text(encoded, bad);
+  expect_clean_failure(encoded, "a coded sampler does not exist", "decode");
+
+  // The stream's view, its bytes flipped in the .bin: the view named just before the list.
+  const size_t view_key = json.rfind("\"bufferView\": ", list);
+  ASSERT_NE(view_key, std::string::npos);
+  const int view = std::stoi(json.substr(view_key + 14));
+  tinygltf::Model model;
+  write_text(encoded, json);
+  ASSERT_TRUE(segmorph::load_gltf(encoded, model).ok());
+  const tinygltf::BufferView& stream = model.bufferViews[size_t(view)];
+  std::string bin = read_text(directory + "/fox.bin");
+  for (size_t i = 4; i < stream.byteLength; i += 3) bin[stream.byteOffset + i] = char(bin[stream.byteOffset + i] ^ 0x5a);
+  write_text(directory + "/fox.bin", bin);
+  expect_clean_failure(encoded, "animation", "decode");
+}
