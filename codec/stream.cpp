@@ -7,6 +7,7 @@
 #include <cstring>
 #include <numeric>
 
+#include "float_bits.h"
 #include "range_coder.h"
 #include "residual_coding.h"
 #include "stream_format.h"
@@ -18,18 +19,6 @@ int bits_for(uint32_t count) {  // bits of a bit tree that can code 0 .. count â
   int bits = 0;
   while (bits < 32 && (uint64_t(1) << bits) < count) ++bits;
   return bits;
-}
-
-uint32_t float_bits(float x) {
-  uint32_t bits;
-  std::memcpy(&bits, &x, 4);
-  return bits;
-}
-
-float bits_float(uint32_t bits) {
-  float x;
-  std::memcpy(&x, &bits, 4);
-  return x;
 }
 
 // The adaptive contexts of a stream, in one place so that writer and reader cannot disagree.

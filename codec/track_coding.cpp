@@ -7,6 +7,7 @@
 #include <cstring>
 #include <string>
 
+#include "float_bits.h"
 #include "range_coder.h"
 #include "track_coding_internal.h"
 #include "track_format.h"
@@ -32,18 +33,6 @@ struct Models {
   std::array<std::array<SignedModel, kSlots>, kPaths> first_key;
   std::array<std::array<std::array<SignedModel, kBuckets>, kSlots>, kPaths> residual;
 };
-
-uint32_t float_bits(float x) {
-  uint32_t bits;
-  std::memcpy(&bits, &x, 4);
-  return bits;
-}
-
-float bits_float(uint32_t bits) {
-  float x;
-  std::memcpy(&x, &bits, 4);
-  return x;
-}
 
 Status corrupt(const std::string& what) {
   return Status(StatusCode::bad_data, "track stream: " + what);
@@ -245,9 +234,8 @@ struct SamplerPlan {
 // The largest step of the grid not above `step`.
 Status plan_step(double step, SamplerPlan& plan) {
   if (!std::isfinite(step) || !(step > 0)) return unusable("quantization steps must be finite and positive");
-  int binary_exponent;
-  const double fraction =
-      std::frexp(step, &binary_exponent);  // step = fraction · 2^binary_exponent, fraction in [0.5, 1)
+  int binary_exponent;  // step = fraction · 2^binary_exponent, fraction in [0.5, 1)
+  const double fraction = std::frexp(step, &binary_exponent);
   plan.exponent = binary_exponent - 1;
   plan.mantissa = uint32_t(std::floor(fraction * 16.0)) - 8;
   if (plan.exponent < track_format::kMinStepExponent || plan.exponent > track_format::kMaxStepExponent)
@@ -256,12 +244,15 @@ Status plan_step(double step, SamplerPlan& plan) {
 }
 
 // glTF interpolates rotations along the shorter arc (glTF 2.0, Appendix C), so q and −q play the same: each key
-// takes the sign nearer its predecessor, which keeps the track smooth for prediction.
+// takes the sign nearer its predecessor, the first key the sign nearer the identity (w ≥ 0), which keeps the track
+// smooth for prediction and its first key near the identity prediction.
 std::vector<float> sign_continuous(const std::vector<float>& values) {
   std::vector<float> out = values;
-  for (size_t k = 4; k < out.size(); k += 4) {
+  const float identity[4] = {0, 0, 0, 1};
+  for (size_t k = 0; k < out.size(); k += 4) {
+    const float* previous = k == 0 ? identity : &out[k - 4];
     double dot = 0;
-    for (size_t c = 0; c < 4; ++c) dot += double(out[k + c]) * double(out[k - 4 + c]);
+    for (size_t c = 0; c < 4; ++c) dot += double(out[k + c]) * double(previous[c]);
     if (dot < 0)
       for (size_t c = 0; c < 4; ++c) out[k + c] = -out[k + c];
   }
@@ -326,18 +317,22 @@ std::vector<double> as_doubles(const std::vector<float>& times) {
   return std::vector<double>(times.begin(), times.end());
 }
 
-// Bytes of the keys coded with `order` from the current model state: how the encoder picks the order.
-size_t cost(const Models& models, SamplerShape shape, int order, const TrackEncoderChoices& choices,
-            const std::vector<int32_t>& quantized) {
-  Models scratch = models;
-  std::vector<uint8_t> bytes;
-  RangeEncoder coder(bytes);
-  KeyEncoder encoder{coder};
-  std::vector<int32_t> unused;
-  shape.order = order;
-  code_keys(encoder, scratch, shape, choices.rotation_all_components, quantized.data(), unused);
-  coder.finish();
-  return bytes.size();
+// The prediction order whose keys code in fewer bytes from the models' current state (order 1 on a tie).
+int cheaper_order(const Models& models, SamplerShape shape, bool all_components,
+                  const std::vector<int32_t>& quantized) {
+  size_t bytes_of[3] = {0, 0, 0};
+  for (int order : {1, 2}) {
+    Models scratch = models;
+    std::vector<uint8_t> bytes;
+    RangeEncoder coder(bytes);
+    KeyEncoder encoder{coder};
+    std::vector<int32_t> unused;
+    shape.order = order;
+    code_keys(encoder, scratch, shape, all_components, quantized.data(), unused);
+    coder.finish();
+    bytes_of[order] = bytes.size();
+  }
+  return bytes_of[2] < bytes_of[1] ? 2 : 1;
 }
 
 // ---- Decoder ----
@@ -425,9 +420,7 @@ Status encode_tracks_with(const TrackSet& tracks, const std::vector<double>& ste
                        &times[size_t(sampler.times)], 1};
     if (shape.times->size() >= 3) {
       shape.order = choices.order != 0 ? choices.order
-                    : cost(models, shape, 2, choices, plan.quantized) < cost(models, shape, 1, choices, plan.quantized)
-                        ? 2
-                        : 1;
+                                       : cheaper_order(models, shape, choices.rotation_all_components, plan.quantized);
       coder.encode_bit(models.order, shape.order == 2);
     }
     std::vector<int32_t> q;

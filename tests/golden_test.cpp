@@ -22,6 +22,7 @@
 #include <sstream>
 
 #include "compressed.h"
+#include "float_bits.h"
 #include "gltf_io.h"
 #include "sample.h"
 #include "stream_format.h"
@@ -92,12 +93,6 @@ TEST(Golden, EveryVersionsFilesDecodeToTheirFrames) {
 }
 
 const char* const kPathNames[] = {"translation", "rotation", "scale", "weights"};
-
-uint32_t float_bits(float x) {
-  uint32_t bits;
-  std::memcpy(&bits, &x, 4);
-  return bits;
-}
 
 // A track set as its golden .txt shows it: per time array its key count and patterns, per sampler its layout and a
 // line of patterns per key.
