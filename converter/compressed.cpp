@@ -237,8 +237,7 @@ Status encode_stream(const std::vector<FrameSequence>& reordered, const CodecSet
 
 // The written primitive: attribute accessors without data (Draco holds it), the two extensions.
 tinygltf::Primitive encoded_primitive(const tinygltf::Primitive& original, const PrimitiveEncoding& encoding,
-                                      CompressedPrimitive compressed, AccessorWriter& writer,
-                                      tinygltf::Model& model) {
+                                      CompressedPrimitive compressed, AccessorWriter& writer) {
   const BaseMesh& decoded = encoding.decoded;
   tinygltf::Primitive out;
   out.material = original.material;
@@ -376,7 +375,7 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
                                      [](const std::map<std::string, int>& t) { return t.count("NORMAL") > 0; });
     CompressedPrimitive compressed;
     compressed.morph_targets = true;
-    tinygltf::Primitive out = encoded_primitive(primitive, encoding, compressed, writer, model);
+    tinygltf::Primitive out = encoded_primitive(primitive, encoding, compressed, writer);
     for (size_t t = 0; t < target_count; ++t) {
       std::map<std::string, int> target;
       target["POSITION"] = writer.add_zeros(encoding.decoded.vertex_count, TINYGLTF_TYPE_VEC3, true);
@@ -549,7 +548,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       report.primitives.push_back(encoding.report);
       report.draco_bytes += encoding.draco_bytes.size();
       report.animation_bytes += encoding.stream.size();
-      primitive = encoded_primitive(primitive, encoding, compressed, writer, model);
+      primitive = encoded_primitive(primitive, encoding, compressed, writer);
     }
     if (mesh.extras.IsObject() && mesh.extras.Has("targetNames")) {
       tinygltf::Value::Object extras = mesh.extras.Get<tinygltf::Value::Object>();
