@@ -144,10 +144,11 @@ for (const [label, file] of files)
 print();
 print('### Where the bytes go');
 print();
-print('segmorph at its default target: the animation stream (SEGMORPH_animation_compression), the Draco base mesh, the ' +
-      'images the file carries (both tools copy them as they are), and the rest: JSON, meshes that do not move, skins, ' +
-      'node (TRS) animation and padding, which segmorph leaves as standard uncompressed glTF. Last columns: both files ' +
-      'without their images, gltfpack at segmorph\'s KG as above.');
+print('segmorph at its default target: the SEGMORPH_animation_compression streams (frames and coded tracks), the Draco ' +
+      'meshes (base meshes, kept skins, meshes that nodes move), the images the file carries (both tools copy them as ' +
+      'they are), and the rest: JSON, meshes that nothing moves, inverse bind matrices, tracks the track stream does not ' +
+      'hold (weights, CUBICSPLINE) and padding. Last columns: both files without their images, gltfpack at segmorph\'s ' +
+      'KG as above.');
 print();
 print('| file | segmorph bytes | stream | Draco base | images | rest | segmorph without images | gltfpack without images |');
 print('|---|---|---|---|---|---|---|---|');

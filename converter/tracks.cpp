@@ -65,8 +65,10 @@ bool read_sampler(const tinygltf::Model& model, const tinygltf::AnimationSampler
       !read_floats(model, sampler.output, "animation output", values, &components).ok() || components != width ||
       times.empty() || values.size() != times.size() * size_t(width))
     return false;
-  for (size_t k = 0; k < times.size(); ++k)
+  for (size_t k = 0; k < times.size(); ++k) {
     if (!(std::isfinite(times[k]) && times[k] >= 0 && (k == 0 || times[k] > times[k - 1]))) return false;
+    if (times[k] == 0) times[k] = 0.0f;  // -0 plays as +0; the stream codes times by their bits and takes +0 only
+  }
   for (float value : values)
     if (!std::isfinite(value)) return false;
   if (path == TrackPath::rotation)
