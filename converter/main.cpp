@@ -507,11 +507,13 @@ int run_encode(const Options& options) {
         e_pi_before, e_pi, bpvf, vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0,
         report.draco_bytes, report.animation_bytes, ms[0], ms[1], ms[2], ms[3], ms[4], report.ms_draco);
   } else {
-    std::printf(
-        "%s: %zu bytes, %.3f bits per vertex per frame (animation %zu bytes, base meshes %zu bytes), "
-        "%zu primitive%s, %.0f clusters, E(Pi) %.6f (before refinement %.6f)\n",
-        options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes, report.primitives.size(),
-        report.primitives.size() == 1 ? "" : "s", clusters, e_pi, e_pi_before);
+    std::printf("%s: %zu bytes, %.3f bits per vertex per frame (animation streams %zu bytes, Draco meshes %zu bytes)",
+                options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes);
+    if (report.primitives.empty())
+      std::printf("\n");
+    else
+      std::printf(", %zu primitive%s coded as frames, %.0f clusters, E(Pi) %.6f (before refinement %.6f)\n",
+                  report.primitives.size(), report.primitives.size() == 1 ? "" : "s", clusters, e_pi, e_pi_before);
   }
   return 0;
 }
