@@ -171,6 +171,19 @@ int components_of_type(int type) {
   return 0;
 }
 
+int type_of_components(int components) {
+  switch (components) {
+    case 1:
+      return TINYGLTF_TYPE_SCALAR;
+    case 2:
+      return TINYGLTF_TYPE_VEC2;
+    case 3:
+      return TINYGLTF_TYPE_VEC3;
+    default:
+      return TINYGLTF_TYPE_VEC4;
+  }
+}
+
 int bytes_of_component(int component_type) {
   switch (component_type) {
     case TINYGLTF_COMPONENT_TYPE_BYTE:
@@ -307,16 +320,6 @@ int AccessorWriter::add_described_indices(size_t count, size_t vertex_count) {
       vertex_count <= 65535 ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
   accessor.count = count;
   accessor.type = TINYGLTF_TYPE_SCALAR;
-  model_.accessors.push_back(accessor);
-  return int(model_.accessors.size()) - 1;
-}
-
-int AccessorWriter::add_unsigned_shorts(const std::vector<uint16_t>& data, int type, int target) {
-  tinygltf::Accessor accessor;
-  accessor.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
-  accessor.count = data.size() / size_t(components_of_type(type));
-  accessor.type = type;
-  accessor.bufferView = add_view(data.data(), data.size() * sizeof(uint16_t), target);
   model_.accessors.push_back(accessor);
   return int(model_.accessors.size()) - 1;
 }

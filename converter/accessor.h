@@ -13,6 +13,8 @@ namespace segmorph {
 
 // Components per element of a tinygltf accessor type (TINYGLTF_TYPE_*), 0 when unknown.
 int components_of_type(int type);
+// The accessor type (TINYGLTF_TYPE_SCALAR to VEC4) of 1 to 4 components; VEC4 for any other count.
+int type_of_components(int components);
 // Bytes of one component (TINYGLTF_COMPONENT_TYPE_*), 0 when unknown.
 int bytes_of_component(int component_type);
 
@@ -56,8 +58,6 @@ class AccessorWriter {
   int add_described_indices(size_t count, size_t vertex_count);
   // An unsigned-int index accessor (TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER).
   int add_indices(const std::vector<uint32_t>& indices);
-  // count × components unsigned shorts of type TINYGLTF_TYPE_* (JOINTS_n, which glTF requires to be integers).
-  int add_unsigned_shorts(const std::vector<uint16_t>& data, int type, int target);
   // count × components unsigned integers of component type UNSIGNED_BYTE or UNSIGNED_SHORT (each value must fit),
   // normalized or not: JOINTS_n, and WEIGHTS_n stored as normalized integers.
   int add_unsigned_integers(const std::vector<uint16_t>& data, int type, int component_type, bool normalized,

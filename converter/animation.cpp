@@ -200,4 +200,9 @@ void evaluate_global_transforms(const tinygltf::Model& model, const NodeGraph& g
   }
 }
 
+double largest_scale(const Eigen::Matrix4d& transform) {
+  return std::max({transform.col(0).head<3>().norm(), transform.col(1).head<3>().norm(),
+                   transform.col(2).head<3>().norm()});
+}
+
 }  // namespace segmorph

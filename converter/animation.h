@@ -48,6 +48,9 @@ struct NodeGraph {
 };
 Status build_node_graph(const tinygltf::Model& model, NodeGraph& graph);
 
+// The largest scale of a transform: the longest of its first three columns' linear parts.
+double largest_scale(const Eigen::Matrix4d& transform);
+
 // Global transforms (column-major 4×4, model space) of every node at time t of `clip` (or the static
 // pose when clip is null): animated TRS where the clip has a track, the node's own matrix or TRS elsewhere.
 void evaluate_global_transforms(const tinygltf::Model& model, const NodeGraph& graph, const Clip* clip, double t,

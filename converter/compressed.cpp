@@ -103,19 +103,6 @@ BaseMesh merge_copies(const BaseMesh& base, const std::vector<FrameSequence>& fr
 
 namespace {
 
-int type_of_components(int components) {
-  switch (components) {
-    case 1:
-      return TINYGLTF_TYPE_SCALAR;
-    case 2:
-      return TINYGLTF_TYPE_VEC2;
-    case 3:
-      return TINYGLTF_TYPE_VEC3;
-    default:
-      return TINYGLTF_TYPE_VEC4;
-  }
-}
-
 // The codec's error target relative to the user's (see compress_model).
 constexpr double kErrorTargetMargin = 0.99;
 

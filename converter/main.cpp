@@ -286,7 +286,6 @@ double vertex_frames(const std::vector<SampledNode>& sampled) {
   return total;
 }
 
-// Encodes a copy of file's model with `codec`: the nodes `keep` marks keep their morph targets, the others are baked.
 // Whether encode keeps the skin of `node` (see --skins): a skinned mesh without morph targets, with an error
 // target (a kept skin's error is searched for; --bpvf rate control and --lossless are the codec's, on baked frames).
 bool keeps_skin(const AnimatedNode& node, const Options& options) {
@@ -304,6 +303,11 @@ constexpr double kTrackDistanceRatio = 0.25;
 constexpr double kSearchGoal = 0.99;
 constexpr int kSearchBracketRounds = 8, kSearchHalvings = 4;
 
+// The KG error target (%) the meshes and tracks outside the codec aim at: --error's, else the default one.
+double error_target(const CodecSettings& codec) {
+  return codec.mode == RateMode::error ? codec.target : CodecSettings().target;
+}
+
 // The worst KG error (%) of `encoded` against the file it was encoded from, as verify measures it.
 Status measured_kg(const SampledFile& file, tinygltf::Model encoded, double& kg) {
   SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(encoded));
@@ -320,8 +324,7 @@ Status measured_kg(const SampledFile& file, tinygltf::Model encoded, double& kg)
 // of kTrackDistanceRatio.
 Status encode_tracks_for(const SampledFile& file, const CodecSettings& codec, bool measured, const Options& options,
                          Encoded& out) {
-  const double error = codec.mode == RateMode::error ? codec.target : CodecSettings().target;
-  const double first = kTrackDistanceRatio * error / 100 * scene_diagonal(out.model);
+  const double first = kTrackDistanceRatio * error_target(codec) / 100 * scene_diagonal(out.model);
   auto encode = [&](double distance, Encoded& result, TrackReport& report) {
     result.model = out.model;
     report = TrackReport();
@@ -384,8 +387,7 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
   SEGMORPH_RETURN_IF_ERROR(compress_model(out.model, baked, codec, options.draco, out.report, report_progress));
   if (codec.mode == RateMode::lossless) return Status::Ok();
   // Draco's RMS error is half its step: a step of 2 × share × E / 100 of a mesh's spread is its share of KG E %.
-  const double error = codec.mode == RateMode::error ? codec.target : CodecSettings().target;
-  const double step_ratio = 2 * kMovingMeshErrorShare * error / 100;
+  const double step_ratio = 2 * kMovingMeshErrorShare * error_target(codec) / 100;
   MovingMeshReport meshes;
   // A rigid part's error counts against the whole it belongs to: a figure's spread is about a quarter of its
   // diagonal.

@@ -137,11 +137,6 @@ int component_type_of(const BaseMeshAttribute& attribute) {
   }
 }
 
-int type_of(int components) {
-  static const int types[] = {TINYGLTF_TYPE_SCALAR, TINYGLTF_TYPE_VEC2, TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4};
-  return types[std::clamp(components, 1, 4) - 1];
-}
-
 Status compress_primitive(tinygltf::Model& model, tinygltf::Primitive& primitive, const std::string& what,
                           DracoSettings settings, double step_ratio, double rigid_spread, MovingMeshReport& report) {
   BaseMesh original;
@@ -171,7 +166,7 @@ Status compress_primitive(tinygltf::Model& model, tinygltf::Primitive& primitive
     accessor.componentType = component_type_of(attribute);
     accessor.normalized = attribute.normalized;
     accessor.count = decoded.vertex_count;
-    accessor.type = type_of(attribute.components);
+    accessor.type = type_of_components(attribute.components);
     model.accessors.push_back(accessor);
     primitive.attributes[attribute.semantic] = int(model.accessors.size()) - 1;
   }
@@ -233,8 +228,7 @@ Status compress_moving_meshes(tinygltf::Model& model, const std::vector<bool>& m
   for (size_t n = 0; n < model.nodes.size(); ++n) {
     const int mesh = model.nodes[n].mesh;
     if (mesh < 0 || size_t(mesh) >= scale.size() || scale[size_t(mesh)] > 0) continue;
-    const Eigen::Matrix4d& m = global[n];
-    scale[size_t(mesh)] = std::max({m.col(0).head<3>().norm(), m.col(1).head<3>().norm(), m.col(2).head<3>().norm()});
+    scale[size_t(mesh)] = largest_scale(global[n]);
   }
   bool any = false;
   for (size_t m = 0; m < meshes.size() && m < model.meshes.size(); ++m) {

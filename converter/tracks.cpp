@@ -50,8 +50,7 @@ bool linear_or_step(const tinygltf::AnimationSampler& sampler) {
 // by that much per unit.
 double parent_scale(const NodeGraph& graph, const std::vector<Eigen::Matrix4d>& global, int node) {
   if (node < 0 || size_t(node) >= graph.parent.size() || graph.parent[size_t(node)] < 0) return 1;
-  const Eigen::Matrix4d& m = global[size_t(graph.parent[size_t(node)])];
-  const double scale = std::max({m.col(0).head<3>().norm(), m.col(1).head<3>().norm(), m.col(2).head<3>().norm()});
+  const double scale = largest_scale(global[size_t(graph.parent[size_t(node)])]);
   return scale > 0 && std::isfinite(scale) ? scale : 1;
 }
 
