@@ -27,8 +27,10 @@ namespace {
 // Frame `frame`'s W × 3 residual symbols into `row`.
 using ResidualSource = std::function<Status(size_t frame, int64_t* row)>;
 
-Status reconstruct(const StreamContent& content, const ResidualSource& residuals, const std::vector<float>& base,
-                   const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
+// frame_bound: how many frames the residuals can hold at most, which the clips' memory is reserved for up front.
+Status reconstruct(const StreamContent& content, const ResidualSource& residuals, size_t frame_bound,
+                   const std::vector<float>& base, const std::vector<uint32_t>& triangles,
+                   std::vector<FrameSequence>& clips) {
   const std::vector<float> welded = welded_base(base, content);
   const AffineMotion motion = dequantized_motion(content, welded);
   const ClusterWeights weights = dequantized_weights(content);
@@ -75,8 +77,12 @@ Status reconstruct(const StreamContent& content, const ResidualSource& residuals
     FrameSequence& clip = clips[c];
     clip.vertex_count = vertex_count;
     clip.frame_count = content.clip_frames[c];
-    // The frames grow as they are decoded, never sized up front by the counts: a stream of a few bytes can claim
-    // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.
+    // The frames grow as they are decoded, never sized by the counts alone: a stream of a few bytes can claim
+    // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would. Memory is
+    // reserved for as many frames as the data can hold (growing a frame at a time would copy the frames decoded
+    // so far at every reallocation).
+    clip.positions.reserve(std::min<size_t>(clip.frame_count, frame_bound - std::min(frame, frame_bound)) *
+                           vertex_count * 3);
     reconstructor.start_clip();
     for (size_t f = 0; f < clip.frame_count;) {
       const size_t count = std::min<size_t>(2, clip.frame_count - f);
@@ -105,13 +111,14 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
     std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, to);
     return Status::Ok();
   };
-  return reconstruct(content, copy, base, triangles, clips);
+  return reconstruct(content, copy, content.frame_count(), base, triangles, clips);
 }
 
 Status reconstruct_clips(const StreamContent& content, StreamReader& reader, const std::vector<float>& base,
                          const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
   return reconstruct(
-      content, [&](size_t, int64_t* row) { return reader.read_frame(row); }, base, triangles, clips);
+      content, [&](size_t, int64_t* row) { return reader.read_frame(row); }, reader.frame_bound(), base, triangles,
+      clips);
 }
 
 }  // namespace segmorph

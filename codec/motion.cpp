@@ -246,27 +246,37 @@ void predict_frame(const float* base, const AffineMotion& motion, const ClusterW
 }
 
 FramePredictor::FramePredictor(const float* base, const AffineMotion& motion, const ClusterWeights& weights)
-    : motion_(motion), weights_(weights), offset_(weights.cluster.size() * 3) {
+    : motion_(motion), pair_offset_(weights.offset), cluster_(weights.cluster) {
+  pairs_.reserve(weights.cluster.size());
   for (size_t v = 0; v + 1 < weights.offset.size(); ++v)
-    for (uint32_t i = weights.offset[v]; i < weights.offset[v + 1]; ++i)
-      for (size_t c = 0; c < 3; ++c)
-        offset_[i * 3 + c] = double(base[v * 3 + c]) - motion.centroid[weights.cluster[i] * 3 + c];
+    for (uint32_t i = weights.offset[v]; i < weights.offset[v + 1]; ++i) {
+      const double* c = &motion.centroid[weights.cluster[i] * 3];
+      const double x = double(base[v * 3]) - c[0], y = double(base[v * 3 + 1]) - c[1],
+                   z = double(base[v * 3 + 2]) - c[2], w = weights.weight[i];
+      pairs_.push_back(Pair{Double2{x, x}, Double2{y, y}, Double2{z, z}, Double2{w, w}});
+    }
 }
 
 void FramePredictor::predict(size_t frame, double* out) const {
-  // Term for term apply()'s expression (the spec fixes the order: the prediction is exact in double).
-  const size_t vertex_count = weights_.offset.size() - 1;
-  const double* transforms = motion_.transform(frame, 0);
+  // Term for term apply()'s expression (the spec fixes the order: the prediction is exact in double), rows 0 and 1
+  // in the two lanes of one vector and row 2 in another: each lane performs the same IEEE operations in the same
+  // order as the scalar expression, so the result is identical, with about half the instructions.
+  const size_t vertex_count = pair_offset_.size() - 1, cluster_count = motion_.cluster_count;
+  std::vector<Columns> columns(cluster_count);
+  for (size_t k = 0; k < cluster_count; ++k) {
+    const double* t = motion_.transform(frame, k);
+    for (int c = 0; c < 4; ++c)
+      columns[k].rows01[c] = Double2{t[c], t[4 + c]}, columns[k].row2[c] = Double2{t[8 + c], 0.0};
+  }
   for (size_t v = 0; v < vertex_count; ++v) {
-    double sum[3] = {0, 0, 0};
-    for (uint32_t i = weights_.offset[v]; i < weights_.offset[v + 1]; ++i) {
-      const double* t = transforms + size_t(weights_.cluster[i]) * 12;
-      const double* d = &offset_[size_t(i) * 3];
-      const double w = weights_.weight[i];
-      for (int r = 0; r < 3; ++r)
-        sum[r] += w * (t[r * 4] * d[0] + t[r * 4 + 1] * d[1] + t[r * 4 + 2] * d[2] + t[r * 4 + 3]);
+    Double2 sum01 = {0, 0}, sum2 = {0, 0};
+    for (uint32_t i = pair_offset_[v]; i < pair_offset_[v + 1]; ++i) {
+      const Columns& t = columns[cluster_[i]];
+      const Pair& d = pairs_[i];
+      sum01 += d.weight * (t.rows01[0] * d.x + t.rows01[1] * d.y + t.rows01[2] * d.z + t.rows01[3]);
+      sum2 += d.weight * (t.row2[0] * d.x + t.row2[1] * d.y + t.row2[2] * d.z + t.row2[3]);
     }
-    for (int c = 0; c < 3; ++c) out[v * 3 + size_t(c)] = sum[c];
+    out[v * 3] = sum01[0], out[v * 3 + 1] = sum01[1], out[v * 3 + 2] = sum2[0];
   }
 }
 

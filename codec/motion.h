@@ -76,17 +76,27 @@ ClusterWeights own_cluster_weights(const Clusters& clusters);
 void predict_frame(const float* base, const AffineMotion& motion, const ClusterWeights& weights, size_t frame,
                    double* out);
 
-// predict_frame for frame after frame of one base, motion and weights (all must outlive it), with what does not
-// depend on the frame (each pair's x − c_k) computed once.
+// predict_frame for frame after frame of one base, motion and weights (the motion must outlive it), with what does
+// not depend on the frame (each pair's x − c_k) computed once.
 class FramePredictor {
  public:
   FramePredictor(const float* base, const AffineMotion& motion, const ClusterWeights& weights);
   void predict(size_t frame, double* out) const;
 
  private:
+  // Two doubles operated on together (SSE2 on x86-64; GCC's and Clang's vector extension).
+  typedef double Double2 __attribute__((vector_size(16)));
+  struct Pair {
+    Double2 x, y, z, weight;  // x − c_k by coordinate and the pair's weight, each in both lanes
+  };
+  struct Columns {
+    Double2 rows01[4], row2[4];  // column c of [L | t]: rows 0 and 1, then row 2 and 0
+  };
+
   const AffineMotion& motion_;
-  const ClusterWeights& weights_;
-  std::vector<double> offset_;  // per (cluster, weight) pair: x − c_k, 3 doubles
+  std::vector<uint32_t> pair_offset_;  // W + 1 (ClusterWeights::offset)
+  std::vector<Pair> pairs_;            // per (vertex, cluster) pair
+  std::vector<uint32_t> cluster_;      // the pair's cluster
 };
 
 }  // namespace segmorph

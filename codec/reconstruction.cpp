@@ -121,7 +121,13 @@ ResidualReconstructor::ResidualReconstructor(const StreamContent& content, const
       current_(traversal.order.size() * 3, 0.0),
       change_(traversal.order.size() * 3, 0.0),
       second_(traversal.order.size() * 3, 0.0),
-      second_change_(traversal.order.size() * 3, 0.0) {}
+      second_change_(traversal.order.size() * 3, 0.0),
+      inverse_count_(traversal.order.size(), 0.0) {
+  for (size_t position = 0; position < inverse_count_.size(); ++position) {
+    const uint32_t n = traversal.earlier_offset[position + 1] - traversal.earlier_offset[position];
+    if (n > 0) inverse_count_[position] = 1.0 / double(n);
+  }
+}
 
 void ResidualReconstructor::start_clip() {
   std::fill(previous_.begin(), previous_.end(), 0.0);

@@ -88,6 +88,7 @@ class ResidualReconstructor {
   // reconstructed residual (c_j above), computed once per vertex. second_, second_change_: two_frames' second
   // frame.
   std::vector<double> previous_, current_, change_, second_, second_change_;
+  std::vector<double> inverse_count_;  // by position: 1 / n, n its number of earlier neighbours (0 when none)
 };
 
 // The clips (original vertex order) of a content read by read_stream against `base`, with the base mesh's

@@ -3,6 +3,14 @@
 
 #include <type_traits>
 
+// The residual loop's per-vertex step is called from three places in two_frames(), which GCC then leaves as calls;
+// inlined, the symbol and output lambdas inline with it.
+#if defined(__GNUC__)
+#define SEGMORPH_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define SEGMORPH_ALWAYS_INLINE inline
+#endif
+
 namespace segmorph {
 
 // Calls f(lossless, temporal, spatial) with the flags as std::integral_constant values, so that the loops f
@@ -26,8 +34,9 @@ void ResidualReconstructor::with_flags(F f) const {
 }
 
 template <bool kLossless, bool kTemporal, bool kSpatial, typename Symbol, typename Output>
-void ResidualReconstructor::vertex(size_t position, const double* predictions, Symbol& symbol, Output& output,
-                                   const double* previous, double* current, double* change) const {
+SEGMORPH_ALWAYS_INLINE void ResidualReconstructor::vertex(size_t position, const double* predictions, Symbol& symbol,
+                                                          Output& output, const double* previous, double* current,
+                                                          double* change) const {
   const uint32_t v = traversal_.order[position];
   const uint32_t begin = traversal_.earlier_offset[position], end = traversal_.earlier_offset[position + 1];
   double sum[3] = {0, 0, 0};
@@ -40,7 +49,7 @@ void ResidualReconstructor::vertex(size_t position, const double* predictions, S
     const size_t at = position * 3 + axis, i = size_t(v) * 3 + axis;
     const double p = predictions[i];
     double r = kTemporal ? previous[at] : 0.0;
-    if (kSpatial && end > begin) r += sum[axis] * (1.0 / double(end - begin));
+    if (kSpatial && end > begin) r += sum[axis] * inverse_count_[position];
     const int64_t k = symbol(i, p, r);
     float x;
     if (kLossless) {

@@ -283,6 +283,12 @@ Status StreamReader::read_frame(int64_t* row) {
   return Status::Ok();
 }
 
+size_t StreamReader::frame_bound() const {
+  assert(decoder_ && content_ && content_->welded_count > 0);
+  const size_t remaining = size_ - format::kHeaderBytes - std::min(decoder_->position(), size_ - format::kHeaderBytes);
+  return (remaining + kImplicitTailBytes + 1) * 364 / content_->welded_count + 1;
+}
+
 Status StreamReader::finish() const {
   assert(decoder_);
   return decoder_->finish();

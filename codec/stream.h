@@ -72,6 +72,10 @@ class StreamReader {
   Status read_frame(int64_t* row);
   Status finish() const;
 
+  // After read_head(): the most frames the stream's remaining bytes can hold. Every welded vertex-frame costs
+  // at least one binary decision of probability at most 2017/2048 (0.022 bits), so a byte holds at most 364.
+  size_t frame_bound() const;
+
  private:
   const uint8_t* data_;
   size_t size_;
