@@ -79,10 +79,12 @@ Status reconstruct(const StreamContent& content, const ResidualSource& residuals
     clip.frame_count = content.clip_frames[c];
     // The frames grow as they are decoded, never sized by the counts alone: a stream of a few bytes can claim
     // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would. Memory is
-    // reserved for as many frames as the data can hold (growing a frame at a time would copy the frames decoded
-    // so far at every reallocation).
-    clip.positions.reserve(std::min<size_t>(clip.frame_count, frame_bound - std::min(frame, frame_bound)) *
-                           vertex_count * 3);
+    // reserved up front (growing a frame at a time copies the frames decoded so far at every reallocation) for as
+    // many frames as the data can hold, and at most 64 MiB: welding lets a short valid stream fill many vertices.
+    constexpr size_t kMaxReservedFloats = size_t(1) << 24;
+    const size_t reserved = std::min({size_t(clip.frame_count), frame_bound - std::min(frame, frame_bound),
+                                      kMaxReservedFloats / std::max<size_t>(vertex_count * 3, 1)});
+    clip.positions.reserve(reserved * vertex_count * 3);
     reconstructor.start_clip();
     for (size_t f = 0; f < clip.frame_count;) {
       const size_t count = std::min<size_t>(2, clip.frame_count - f);
