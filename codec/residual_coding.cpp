@@ -33,7 +33,9 @@ constexpr int64_t kEscape = INT32_MIN;  // lossless only: the residual follows a
 using History = uint8_t;
 
 // The history with p1 moved to p2 and p2 to p3, p1 still 0: the history after a zero residual.
-History aged_history(History h) { return History((h & 7u) << 3 | uint32_t((h & 0x18u) != 0) << 6); }
+History aged_history(History h) {
+  return History((h & 7u) << 3 | uint32_t((h & 0x18u) != 0) << 6);
+}
 
 History next_history(History h, int64_t value) {
   const uint32_t q = value == 0 ? 0u : (value == 1 || value == -1) ? 1u : 2u;
@@ -121,7 +123,7 @@ inline DecodedSymbol decode_symbol(RangeDecoder& decoder, AxisModels& models, Hi
                                    bool implied_nonzero, bool lossless) {
   const History aged = aged_history(h);
   if (!implied_nonzero && decoder.decode_bit(models.nonzero[kContexts.nonzero[h] + earlier]) == 0) return {0, aged};
-  const uint32_t negative = decoder.decode_bit(models.negative[kContexts.negative[h]]);
+  const uint32_t negative = decoder.decode_bit_as_data(models.negative[kContexts.negative[h]]);
   const size_t context = kContexts.magnitude[h];
   const History signed_aged = History(aged | negative << 2);
   if (decoder.decode_bit(models.above_one[context]) == 0) return {negative ? -1 : 1, History(signed_aged | 1)};
