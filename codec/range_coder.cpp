@@ -104,7 +104,8 @@ uint32_t UnsignedModel::decode(RangeDecoder& decoder) {
     return 0;
   }
   if (length_class < 2) return length_class;
-  const uint32_t top_two = 2u | decoder.decode_bit(below_leading_[length_class]);  // the leading 1 and the bit below
+  // The leading 1 and the bit below it.
+  const uint32_t top_two = 2u | decoder.decode_bit_as_data(below_leading_[length_class]);
   const int low_bits = int(length_class) - 2;
   if (low_bits == 0) return top_two;
   return (top_two << low_bits) | decoder.decode_direct_bits(low_bits);
@@ -121,7 +122,7 @@ void SignedModel::encode(RangeEncoder& encoder, int32_t value) {
 
 int32_t SignedModel::decode(RangeDecoder& decoder) {
   if (decoder.decode_bit(nonzero_) == 0) return 0;
-  const uint32_t negative = decoder.decode_bit(negative_);
+  const uint32_t negative = decoder.decode_bit_as_data(negative_);
   const uint32_t magnitude_minus_one = magnitude_minus_one_.decode(decoder);
   // int32 holds magnitudes up to 2^31 - 1 for positive values and 2^31 for negative ones.
   if (magnitude_minus_one > (negative ? 0x7FFFFFFFu : 0x7FFFFFFEu)) {

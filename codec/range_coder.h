@@ -135,6 +135,26 @@ class RangeDecoder {
     return bit;
   }
 
+  // The same as decode_bit, without a branch on the bit: for bits that the caller only uses as data (a sign, the
+  // path in a bit tree). A processor guesses such a branch wrong as often as the bit is unpredictable, and each wrong
+  // guess costs more than the decision; the selects below cost nothing to guess.
+  uint32_t decode_bit_as_data(BitModel& model) {
+    const uint32_t probability = model.prob_zero;
+    const uint32_t bound = (range_ >> kProbabilityBits) * probability;
+    const uint32_t bit = code_ >= bound ? 1u : 0u;
+    const uint32_t mask = 0u - bit;
+    code_ -= bound & mask;
+    range_ = bound + ((range_ - 2 * bound) & mask);  // range - bound for a 1, bound for a 0 (modulo 2^32)
+    const uint32_t after_zero = probability + ((kProbabilityOne - probability) >> kAdaptationShift);
+    const uint32_t after_one = probability - (probability >> kAdaptationShift);
+    model.prob_zero = uint16_t(after_zero + ((after_one - after_zero) & mask));  // BitModel::update
+    if (range_ < kRangeTop) {
+      range_ <<= 8;
+      code_ = (code_ << 8) | next_byte();
+    }
+    return bit;
+  }
+
   // Decodes `count` (0 <= count <= 32) equiprobable bits, most significant first.
   uint32_t decode_direct_bits(int count) {
     assert(count >= 0 && count <= kMaxDirectBits);

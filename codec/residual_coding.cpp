@@ -32,9 +32,14 @@ constexpr int64_t kEscape = INT32_MIN;  // lossless only: the residual follows a
 //   bit 6:    p3 ≠ 0
 using History = uint8_t;
 
+// The history with p1 moved to p2 and p2 to p3, p1 still 0: the history after a zero residual.
+History aged_history(History h) {
+  return History((h & 7u) << 3 | uint32_t((h & 0x18u) != 0) << 6);
+}
+
 History next_history(History h, int64_t value) {
   const uint32_t q = value == 0 ? 0u : (value == 1 || value == -1) ? 1u : 2u;
-  return History(q | uint32_t(value < 0) << 2 | (h & 7u) << 3 | uint32_t((h & 0x18u) != 0) << 6);
+  return History(aged_history(h) | q | uint32_t(value < 0) << 2);
 }
 
 // The context indices of spec/entropy-coding.md section 8.2 as functions of the history byte.
@@ -82,31 +87,6 @@ void encode_symbol(RangeEncoder& encoder, AxisModels& models, History h, uint32_
   models.magnitude_minus_three.encode(encoder, magnitude - 3);
 }
 
-// Magnitudes of 3 and more, rare in lossy streams: kept out of the inlined path. int32 holds magnitudes up to
-// 2^31 − 1 for positive values and 2^31 for negative ones.
-uint32_t decode_large_magnitude(RangeDecoder& decoder, AxisModels& models, uint32_t negative) {
-  const uint32_t rest = models.magnitude_minus_three.decode(decoder);
-  if (rest > (negative ? 0x80000000u : 0x7FFFFFFFu) - 3) {
-    decoder.mark_invalid("range-coded residual is outside int32");
-    return 3;
-  }
-  return rest + 3;
-}
-
-// Mirrors encode_symbol. Inlined into the decoding loop: the decoder's time goes into these few decisions.
-inline int64_t decode_symbol(RangeDecoder& decoder, AxisModels& models, History h, uint32_t earlier,
-                             bool implied_nonzero) {
-  if (!implied_nonzero && decoder.decode_bit(models.nonzero[kContexts.nonzero[h] + earlier]) == 0) return 0;
-  const uint32_t negative = decoder.decode_bit(models.negative[kContexts.negative[h]]);
-  const size_t context = kContexts.magnitude[h];
-  uint32_t magnitude = 1;
-  if (decoder.decode_bit(models.above_one[context])) {
-    magnitude = 2;
-    if (decoder.decode_bit(models.above_two[context])) magnitude = decode_large_magnitude(decoder, models, negative);
-  }
-  return negative ? -int64_t(magnitude) : int64_t(magnitude);
-}
-
 // After an escape symbol: the residual's 64 bits. Only lossless streams have escapes, and only for residuals that
 // have no other code (outside (INT32_MIN, INT32_MAX]), so that each residual sequence has one stream.
 int64_t decode_escaped(RangeDecoder& decoder, bool lossless) {
@@ -118,6 +98,38 @@ int64_t decode_escaped(RangeDecoder& decoder, bool lossless) {
   const int64_t value = int64_t((high << 32) | low);
   if (value > kEscape && value <= INT32_MAX) decoder.mark_invalid("animation stream: escape for a residual in int32");
   return value;
+}
+
+// Magnitudes of 3 and more, and escapes, rare in lossy streams: kept out of the inlined path. int32 holds magnitudes
+// up to 2^31 − 1 for positive values and 2^31 for negative ones.
+[[gnu::noinline]] int64_t decode_large(RangeDecoder& decoder, AxisModels& models, uint32_t negative, bool lossless) {
+  const uint32_t rest = models.magnitude_minus_three.decode(decoder);
+  if (rest > (negative ? 0x80000000u : 0x7FFFFFFFu) - 3) {
+    decoder.mark_invalid("range-coded residual is outside int32");
+    return negative ? -3 : 3;
+  }
+  const int64_t value = negative ? -int64_t(rest + 3) : int64_t(rest + 3);
+  return value == kEscape ? decode_escaped(decoder, lossless) : value;
+}
+
+struct DecodedSymbol {
+  int64_t value;
+  History history;  // the history after it
+};
+
+// Mirrors encode_symbol, escape included. Inlined into the decoding loop: the decoder's time goes into these few
+// decisions.
+inline DecodedSymbol decode_symbol(RangeDecoder& decoder, AxisModels& models, History h, uint32_t earlier,
+                                   bool implied_nonzero, bool lossless) {
+  const History aged = aged_history(h);
+  if (!implied_nonzero && decoder.decode_bit(models.nonzero[kContexts.nonzero[h] + earlier]) == 0) return {0, aged};
+  const uint32_t negative = decoder.decode_bit_as_data(models.negative[kContexts.negative[h]]);
+  const size_t context = kContexts.magnitude[h];
+  const History signed_aged = History(aged | negative << 2);
+  if (decoder.decode_bit(models.above_one[context]) == 0) return {negative ? -1 : 1, History(signed_aged | 1)};
+  if (decoder.decode_bit(models.above_two[context]) == 0) return {negative ? -2 : 2, History(signed_aged | 2)};
+  const int64_t value = decode_large(decoder, models, negative, lossless);
+  return {value, next_history(h, value)};
 }
 
 }  // namespace
@@ -165,16 +177,16 @@ void ResidualDecoder::decode_frame(RangeDecoder& decoder, int64_t* r) {
   for (size_t w = 0; w < welded_count_; ++w, r += 3, h += 3) {
     if (decoder.decode_bit(models.vertex[vertex_context(h)]) == 0) {
       r[0] = r[1] = r[2] = 0;
-      h[0] = next_history(h[0], 0), h[1] = next_history(h[1], 0), h[2] = next_history(h[2], 0);
+      h[0] = aged_history(h[0]), h[1] = aged_history(h[1]), h[2] = aged_history(h[2]);
       continue;
     }
-    for (size_t axis = 0; axis < 3; ++axis) {
-      const bool earlier = (axis >= 1 && r[0] != 0) || (axis == 2 && r[1] != 0);
-      int64_t value = decode_symbol(decoder, models.axis[axis], h[axis], earlier, axis == 2 && !earlier);
-      if (value == kEscape) value = decode_escaped(decoder, lossless_);
-      r[axis] = value;
-    }
-    for (size_t axis = 0; axis < 3; ++axis) h[axis] = next_history(h[axis], r[axis]);
+    const DecodedSymbol x = decode_symbol(decoder, models.axis[0], h[0], 0, false, lossless_);
+    const uint32_t x_nonzero = x.value != 0;
+    const DecodedSymbol y = decode_symbol(decoder, models.axis[1], h[1], x_nonzero, false, lossless_);
+    const uint32_t earlier = x_nonzero | uint32_t(y.value != 0);
+    const DecodedSymbol z = decode_symbol(decoder, models.axis[2], h[2], earlier, !earlier, lossless_);
+    r[0] = x.value, r[1] = y.value, r[2] = z.value;
+    h[0] = x.history, h[1] = y.history, h[2] = z.history;
   }
 }
 
