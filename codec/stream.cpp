@@ -298,8 +298,10 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
   StreamReader reader(data, size);
   SEGMORPH_RETURN_IF_ERROR(reader.read_head(base, content));
   // The residuals grow a frame at a time as the data proves to be there (a few bytes of stream can claim
-  // gigabytes of frames).
+  // gigabytes of frames), in memory reserved for as many frames as the data can hold, at most 64 MiB.
   const size_t row = size_t(content.welded_count) * 3, frames = content.frame_count();
+  constexpr size_t kMaxReservedResiduals = (size_t(64) << 20) / sizeof(int64_t);
+  content.residuals.reserve(std::min({frames, reader.frame_bound(), kMaxReservedResiduals / row}) * row);
   for (size_t f = 0; f < frames; ++f) {
     content.residuals.resize((f + 1) * row);
     SEGMORPH_RETURN_IF_ERROR(reader.read_frame(&content.residuals[f * row]));
