@@ -11,9 +11,9 @@
 #include "gltf_io.h"
 #include "metrics.h"
 #include "moving_meshes.h"
-#include "tracks.h"
 #include "sample.h"
 #include "topology.h"
+#include "tracks.h"
 
 namespace segmorph {
 namespace {
@@ -62,7 +62,8 @@ const char* const kUsage =
     "                     (default 12)\n"
     "  --skins MODE       encode: what a skinned mesh (without morph targets) stores. keep (default): its\n"
     "                     skin, the mesh compressed with Draco and the joints' tracks coded; bake: its\n"
-    "                     sampled frames, for runtimes without skinning. --bpvf and --lossless bake\n"
+    "                     sampled frames, for runtimes without skinning. --bpvf and --lossless bake, and\n"
+    "                     so does keep where a kept skin cannot reach --error (its weights are bytes)\n"
     "  --targets MODE     encode: what a morph-target mesh (unskinned, one node) stores. keep: its targets,\n"
     "                     compressed, played by its own weights animation; bake: its sampled frames, like a\n"
     "                     skinned mesh. auto (default): where a mesh has at most half as many targets as\n"
@@ -272,6 +273,7 @@ bool keeps_targets(const tinygltf::Model& model, const AnimatedNode& node, const
 struct Encoded {
   tinygltf::Model model;
   CompressReport report;
+  double kept_skins_floor = 0;  // when kept skins cannot reach the --error target: the KG % they stay at
 };
 
 // A --bpvf result within this factor of its target meets it (the codec aims a little below).
@@ -322,8 +324,7 @@ Status measured_kg(const SampledFile& file, tinygltf::Model encoded, double& kg)
 // Codes the tracks of `out.model` (whose kept skins depend on them): with --error, the coarsest quantization
 // distance (a factor of 2 apart, then halved 4 times) whose measured KG is within the target; otherwise the rule
 // of kTrackDistanceRatio.
-Status encode_tracks_for(const SampledFile& file, const CodecSettings& codec, bool measured, const Options& options,
-                         Encoded& out) {
+Status encode_tracks_for(const SampledFile& file, const CodecSettings& codec, bool measured, Encoded& out) {
   const double first = kTrackDistanceRatio * error_target(codec) / 100 * scene_diagonal(out.model);
   auto encode = [&](double distance, Encoded& result, TrackReport& report) {
     result.model = out.model;
@@ -353,11 +354,9 @@ Status encode_tracks_for(const SampledFile& file, const CodecSettings& codec, bo
     if (within > 0 && beyond > 0) break;
     distance = ok ? distance * 2 : distance / 2;
   }
-  if (within == 0) {
-    char line[160];
-    std::snprintf(line, sizeof(line), "warning: the kept skins' error stays at KG %.4f %% with the finest tracks tried", kg);
-    progress(options, line);
-    within = distance;  // the finest tried
+  if (within == 0) {  // the error is not the tracks' (a kept skin's weights are bytes): the caller bakes instead
+    out.kept_skins_floor = kg;
+    return Status::Ok();
   }
   for (int round = 0; beyond > 0 && round < kSearchHalvings; ++round) {
     distance = std::sqrt(within * beyond);
@@ -375,11 +374,14 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
                          const Options& options, Encoded& out) {
   out.model = file.model;
   out.report = CompressReport();
+  out.kept_skins_floor = 0;
   std::vector<SampledNode> kept, baked;
   std::vector<int> kept_skins;
   for (size_t i = 0; i < file.sampled.size(); ++i) {
-    if (keeps_skin(*file.sampled[i].node, options)) kept_skins.push_back(file.sampled[i].node->node);
-    else (keep[i] ? kept : baked).push_back(file.sampled[i]);
+    if (keeps_skin(*file.sampled[i].node, options))
+      kept_skins.push_back(file.sampled[i].node->node);
+    else
+      (keep[i] ? kept : baked).push_back(file.sampled[i]);
   }
   const auto report_progress = [&](const std::string& message) { progress(options, message); };
   SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, codec, options.draco, out.report, report_progress));
@@ -397,7 +399,7 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
   out.report.draco_bytes += meshes.bytes;
   progress(options, kept_skins.empty() ? "coding the animation tracks"
                                        : "coding the animation tracks, measuring the kept skins' error");
-  return encode_tracks_for(file, codec, !kept_skins.empty(), options, out);
+  return encode_tracks_for(file, codec, !kept_skins.empty(), out);
 }
 
 // encode_model_once, and with --bpvf a second time: the rate is of the whole file, and the codec budgets only its
@@ -405,6 +407,17 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
 // first encode, comes off the codec's target.
 Status encode_model(const SampledFile& file, const std::vector<bool>& keep, const Options& options, Encoded& out) {
   SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, options.codec, options, out));
+  if (out.kept_skins_floor > 0) {
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "kept skins stay at KG %.4f %% even with the finest tracks, above --error %g (their weights are "
+                  "bytes): baking them instead",
+                  out.kept_skins_floor, options.codec.target);
+    progress(options, line);
+    Options baked = options;
+    baked.skins = Options::Skins::bake;
+    SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, options.codec, baked, out));
+  }
   if (options.codec.mode != RateMode::bpvf) return Status::Ok();
   const double frames = vertex_frames(file.sampled);
   const size_t coded = out.report.draco_bytes + out.report.animation_bytes, whole = glb_size(out.model);
@@ -417,7 +430,8 @@ Status encode_model(const SampledFile& file, const std::vector<bool>& keep, cons
     std::snprintf(target, sizeof(target), "%g", options.codec.target);
     return Status(StatusCode::invalid_argument, std::string("--bpvf ") + target +
                                                     " is below what the rest of the file takes alone: the first "
-                                                    "encode came to " + figures);
+                                                    "encode came to " +
+                                                    figures);
   }
   progress(options, std::string("first encode: ") + figures + "; encoding again for the whole file's rate");
   CodecSettings codec = options.codec;
@@ -426,8 +440,7 @@ Status encode_model(const SampledFile& file, const std::vector<bool>& keep, cons
   const double reached = 8.0 * double(glb_size(out.model)) / frames;
   if (reached > kBpvfTolerance * options.codec.target) {
     char line[200];
-    std::snprintf(line, sizeof(line),
-                  "warning: --bpvf %g is out of reach for this file: it comes to %.3f bpvf",
+    std::snprintf(line, sizeof(line), "warning: --bpvf %g is out of reach for this file: it comes to %.3f bpvf",
                   options.codec.target, reached);
     progress(options, line);
   }
@@ -474,9 +487,9 @@ int run_encode(const Options& options) {
       const double budget = kBpvfTolerance * options.codec.target * vertex_frames(file.sampled) / 8;
       const bool kept_fits = double(kept_size) <= budget, baked_fits = double(baked_size) <= budget;
       const bool take_baked = options.codec.mode != RateMode::bpvf ? baked_size < kept_size
-                              : kept_fits != baked_fits                 ? baked_fits
-                              : kept_fits                               ? baked_kg < kept_kg
-                                                                        : baked_size < kept_size;
+                              : kept_fits != baked_fits            ? baked_fits
+                              : kept_fits                          ? baked_kg < kept_kg
+                                                                   : baked_size < kept_size;
       if (take_baked) encoded = std::move(baked);
     }
   }

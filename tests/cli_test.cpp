@@ -590,6 +590,26 @@ TEST(Cli, SkinsOption) {
   EXPECT_EQ(json_number(result.out, "primitives"), 1);
 }
 
+// A kept skin's weights are bytes, which sets a floor under its error: below it, encode bakes the skin instead of
+// writing a file above the target (SimpleSkin kept stays at KG 0.07 %).
+TEST(Cli, KeptSkinsBelowTheirFloorAreBaked) {
+  const std::string directory = output_directory("skin_floor");
+  const std::string input = sample("SimpleSkin/SimpleSkin.gltf");
+  Result result = run("encode " + input + " -o " + directory + "/fine.glb --error 0.05");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("baking them instead"), std::string::npos) << result.err;
+  result = run("verify -q " + input + " " + directory + "/fine.glb --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_LE(json_number(result.out, "kg_percent"), 0.05);
+  // Within reach, the skin stays kept.
+  result = run("encode " + input + " -o " + directory + "/coarse.glb --error 0.15");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(result.err.find("baking them instead"), std::string::npos) << result.err;
+  result = run("verify -q " + input + " " + directory + "/coarse.glb --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_LE(json_number(result.out, "kg_percent"), 0.15);
+}
+
 // A coded animation that disagrees with its stream, or whose stream is damaged, is refused in one line.
 TEST(Cli, DamagedTrackStreamsAreRefused) {
   const std::string directory = output_directory("damaged_tracks");
