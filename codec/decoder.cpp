@@ -27,7 +27,7 @@ namespace {
 // Frame `frame`'s W × 3 residual symbols into `row`.
 using ResidualSource = std::function<Status(size_t frame, int64_t* row)>;
 
-// frame_bound: how many frames the residuals can hold at most, which the clips' memory is reserved for up front.
+// frame_bound: how many frames the residuals can hold at most (frames_to_reserve).
 Status reconstruct(const StreamContent& content, const ResidualSource& residuals, size_t frame_bound,
                    const std::vector<float>& base, const std::vector<uint32_t>& triangles,
                    std::vector<FrameSequence>& clips) {
@@ -78,13 +78,11 @@ Status reconstruct(const StreamContent& content, const ResidualSource& residuals
     clip.vertex_count = vertex_count;
     clip.frame_count = content.clip_frames[c];
     // The frames grow as they are decoded, never sized by the counts alone: a stream of a few bytes can claim
-    // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would. Memory is
-    // reserved up front (growing a frame at a time copies the frames decoded so far at every reallocation) for as
-    // many frames as the data can hold, and at most 64 MiB: welding lets a short valid stream fill many vertices.
-    constexpr size_t kMaxReservedFloats = size_t(1) << 24;
-    const size_t reserved = std::min({size_t(clip.frame_count), frame_bound - std::min(frame, frame_bound),
-                                      kMaxReservedFloats / std::max<size_t>(vertex_count * 3, 1)});
-    clip.positions.reserve(reserved * vertex_count * 3);
+    // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.
+    const size_t frame_floats = vertex_count * 3;
+    clip.positions.reserve(
+        frames_to_reserve(clip.frame_count, frame_bound - std::min(frame, frame_bound), frame_floats * sizeof(float)) *
+        frame_floats);
     reconstructor.start_clip();
     for (size_t f = 0; f < clip.frame_count;) {
       const size_t count = std::min<size_t>(2, clip.frame_count - f);

@@ -135,9 +135,10 @@ class RangeDecoder {
     return bit;
   }
 
-  // The same as decode_bit, without a branch on the bit: for bits that the caller only uses as data (a sign, the
-  // path in a bit tree). A processor guesses such a branch wrong as often as the bit is unpredictable, and each wrong
-  // guess costs more than the decision; the selects below cost nothing to guess.
+  // The same as decode_bit, without a branch on the bit: for bits that the caller only uses as data and that are
+  // close to a coin toss (a sign, a bit of a number's value). A processor guesses such a branch wrong about half the
+  // time, and each wrong guess costs more than the decision; the selects below cost nothing to guess. (In a bit
+  // tree the next probability's address waits for the bit either way: a branch there measured faster.)
   uint32_t decode_bit_as_data(BitModel& model) {
     const uint32_t probability = model.prob_zero;
     const uint32_t bound = (range_ >> kProbabilityBits) * probability;

@@ -289,6 +289,11 @@ size_t StreamReader::frame_bound() const {
   return (remaining + kImplicitTailBytes + 1) * 364 / content_->welded_count + 1;
 }
 
+size_t frames_to_reserve(size_t frames, size_t bound, size_t frame_bytes) {
+  constexpr size_t kMaxReservedBytes = size_t(64) << 20;
+  return std::min({frames, bound, kMaxReservedBytes / std::max<size_t>(frame_bytes, 1)});
+}
+
 Status StreamReader::finish() const {
   assert(decoder_);
   return decoder_->finish();
@@ -298,10 +303,9 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
   StreamReader reader(data, size);
   SEGMORPH_RETURN_IF_ERROR(reader.read_head(base, content));
   // The residuals grow a frame at a time as the data proves to be there (a few bytes of stream can claim
-  // gigabytes of frames), in memory reserved for as many frames as the data can hold, at most 64 MiB.
+  // gigabytes of frames).
   const size_t row = size_t(content.welded_count) * 3, frames = content.frame_count();
-  constexpr size_t kMaxReservedResiduals = (size_t(64) << 20) / sizeof(int64_t);
-  content.residuals.reserve(std::min({frames, reader.frame_bound(), kMaxReservedResiduals / row}) * row);
+  content.residuals.reserve(frames_to_reserve(frames, reader.frame_bound(), row * sizeof(int64_t)) * row);
   for (size_t f = 0; f < frames; ++f) {
     content.residuals.resize((f + 1) * row);
     SEGMORPH_RETURN_IF_ERROR(reader.read_frame(&content.residuals[f * row]));

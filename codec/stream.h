@@ -56,6 +56,12 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
 // it. Every count is checked against format limits and the data before anything is sized by it.
 Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& base, StreamContent& content);
 
+// How many of `frames` frames of `frame_bytes` bytes each a decoder reserves memory for before decoding them
+// (growing a frame at a time copies the frames decoded so far at every reallocation): no more than `bound`, as
+// many as the data can hold (StreamReader::frame_bound), and at most 64 MiB, because welding lets a short valid
+// stream fill many vertices and a damaged one must not allocate gigabytes up front.
+size_t frames_to_reserve(size_t frames, size_t bound, size_t frame_bytes);
+
 // read_stream in steps, for a decoder that turns each frame's residuals into positions as they come (in cache, and
 // without holding F × W × 3 symbols): read_head() parses everything before the residuals into `content` (which
 // must outlive the reader; content.residuals stays empty), read_frame() the next frame's W × 3 residual symbols,
@@ -74,6 +80,7 @@ class StreamReader {
 
   // After read_head(): the most frames the stream's remaining bytes can hold. Every welded vertex-frame costs
   // at least one binary decision of probability at most 2017/2048 (0.022 bits), so a byte holds at most 364.
+  // frames_to_reserve() turns it into memory reserved up front.
   size_t frame_bound() const;
 
  private:
