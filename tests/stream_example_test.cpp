@@ -13,9 +13,12 @@
 #include "codec.h"
 #include "stream.h"
 #include "stream_format.h"
+#include "test_files.h"
 
 namespace segmorph {
 namespace {
+
+using testing::hex;
 
 constexpr char kExampleHex[] =
     "53474d4101063e000000100445d5db1a3c8ed7bc141eada18000000037ee2e161dd2d2d31f1aaf4c3e8b4fa4457ea8dd"
@@ -95,16 +98,6 @@ constexpr uint32_t kExampleFrames[3][8][3] = {
      {0x3f89828f, 0x3f8147ae, 0x3c800000},
      {0x3fff2a19, 0x3c23d70a, 0x3e666666}},
 };
-
-std::string hex(const std::vector<uint8_t>& bytes) {
-  std::string out;
-  char digits[3];
-  for (uint8_t byte : bytes) {
-    std::snprintf(digits, sizeof(digits), "%02x", byte);
-    out += digits;
-  }
-  return out;
-}
 
 std::vector<uint8_t> written() {
   std::vector<uint8_t> bytes;

@@ -1,8 +1,10 @@
-// Where the tests find sample files.
+// Where the tests find sample files, and small helpers for what they read and write.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
@@ -23,6 +25,17 @@ inline std::vector<std::string> gltf_files_under(const std::string& directory) {
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+// Bytes as lowercase hexadecimal, two digits each, as the specifications' worked examples print them.
+inline std::string hex(const std::vector<uint8_t>& bytes) {
+  std::string out;
+  char digits[3];
+  for (uint8_t byte : bytes) {
+    std::snprintf(digits, sizeof(digits), "%02x", byte);
+    out += digits;
+  }
+  return out;
 }
 
 // One number from a JSON object the tool printed ("key":value); NaN when the key is missing.

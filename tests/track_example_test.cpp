@@ -13,10 +13,13 @@
 #include <sstream>
 #include <string>
 
+#include "test_files.h"
 #include "track_coding.h"
 
 namespace segmorph {
 namespace {
+
+using testing::hex;
 
 constexpr char kExampleHex[] = "53474d5401042e126400022c9610048e697f06bdb6551efcf23b5b7cdcd8cae5af9907599670ee";
 
@@ -43,16 +46,6 @@ const std::vector<std::vector<uint32_t>> kExampleValues = {
     {0x00000000, 0x00000000, 0x00000000, 0x3f800000, 0x00000000, 0x00000000, 0x3efff579, 0x3f5db6e1, 0x00000000,
      0x00000000, 0x3f5db6e1, 0x3efff579},
 };
-
-std::string hex(const std::vector<uint8_t>& bytes) {
-  std::string out;
-  char digits[3];
-  for (uint8_t byte : bytes) {
-    std::snprintf(digits, sizeof(digits), "%02x", byte);
-    out += digits;
-  }
-  return out;
-}
 
 std::vector<uint32_t> patterns(const std::vector<float>& values) {
   std::vector<uint32_t> out(values.size());
