@@ -1,8 +1,9 @@
 // Google Benchmark of the codec's stages on one sequence (Release build, one core):
-//   codec_benchmark [FILE] [--error E] [--benchmark_filter=...] [other Google Benchmark flags]
+//   codec_benchmark [FILE] [--error E] [--fast-decode] [--benchmark_filter=...] [other Google Benchmark flags]
 // FILE defaults to the cow sequence in ../shared/samples. The stream is encoded once at startup (at --error E,
-// default 0.15); the decoder benchmarks decode it, the encoder's stage benchmarks rerun one stage on the
-// encoder's own intermediate data. Counters: vertex-frames per second (vf/s) where it means something.
+// default 0.15; with --fast-decode its residuals in the table code, CodecSettings::table_residuals); the decoder
+// benchmarks decode it, the encoder's stage benchmarks rerun one stage on the encoder's own intermediate data.
+// Counters: vertex-frames per second (vf/s) where it means something.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -44,7 +45,7 @@ struct Fixture {
 };
 Fixture* fixture = nullptr;
 
-bool set_up(const char* path, double error) {
+bool set_up(const char* path, double error, bool table_residuals) {
   tinygltf::Model model;
   Scene scene;
   SampledNode node;
@@ -54,6 +55,7 @@ bool set_up(const char* path, double error) {
   if (status.ok()) status = sample_node(model, scene, scene.animated[0], SampleSettings(), node);
   CodecSettings settings;
   settings.target = error;
+  settings.table_residuals = table_residuals;
   Fixture& f = *fixture;
   if (status.ok()) {
     f.clips = node.primitives[0].clips;
@@ -237,9 +239,12 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   std::string path = SEGMORPH_SOURCE_DIR "/../shared/samples/sequences/Cow_pcow/cow.glb";
   double error = 0.15;
+  bool table_residuals = false;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--error") == 0 && i + 1 < argc)
       error = std::atof(argv[++i]);
+    else if (std::strcmp(argv[i], "--fast-decode") == 0)
+      table_residuals = true;
     else if (argv[i][0] != '-')
       path = argv[i];
     else {
@@ -249,7 +254,7 @@ int main(int argc, char** argv) {
   }
   Fixture storage;
   fixture = &storage;
-  if (!set_up(path.c_str(), error)) return 1;
+  if (!set_up(path.c_str(), error, table_residuals)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

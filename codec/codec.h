@@ -28,6 +28,9 @@ struct CodecSettings {
   bool blend_weights = true;         // Eq. 3; off: each vertex follows its own cluster only
   bool temporal_residuals = true;    // beyond the paper: residuals predicted from the previous frame's
   bool spatial_residuals = true;     // beyond the paper: ... and from already decoded neighbours'
+  // Beyond the paper: the residuals in the table code of stream version 2 (table_residual_coding.h), which decodes
+  // faster and costs more bytes than the adaptive code. Lossy modes only.
+  bool table_residuals = false;
   // Bytes of the output outside this stream (the base mesh, the container) that a bpvf target includes.
   size_t outside_bytes = 0;
 };

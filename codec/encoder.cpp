@@ -84,7 +84,8 @@ void quantize_motion(const AffineMotion& fitted, double linear_step, double tran
       const double* t = fitted.transform(f, k);
       int32_t* q = &content.motion[(f * fitted.cluster_count + k) * 12];
       for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) q[r * 3 + c] = quantized_coefficient((t[r * 4 + c] - (r == c ? 1.0 : 0.0)) / linear);
+        for (int c = 0; c < 3; ++c)
+          q[r * 3 + c] = quantized_coefficient((t[r * 4 + c] - (r == c ? 1.0 : 0.0)) / linear);
         q[9 + r] = quantized_coefficient((t[r * 4 + 3] - fitted.centroid[k * 3 + size_t(r)]) / translation);
       }
     }
@@ -180,7 +181,8 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   StreamContent content;
   content.flags = (settings.mode == RateMode::lossless ? format::kFlagLossless : 0) |
                   (settings.temporal_residuals ? format::kFlagTemporalResiduals : 0) |
-                  (settings.spatial_residuals ? format::kFlagSpatialResiduals : 0);
+                  (settings.spatial_residuals ? format::kFlagSpatialResiduals : 0) |
+                  (settings.table_residuals && settings.mode != RateMode::lossless ? format::kFlagTableResiduals : 0);
   content.vertex_count = uint32_t(vertex_count);
   content.welded_index = topology.welded_index;
   content.welded_count = uint32_t(topology.welded_count());

@@ -11,6 +11,7 @@
 #include "range_coder.h"
 #include "residual_coding.h"
 #include "stream_format.h"
+#include "table_residual_coding.h"
 
 namespace segmorph {
 namespace {
@@ -78,7 +79,8 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
                   StreamSizes* sizes) {
   const size_t start = out.size();
   out.insert(out.end(), std::begin(format::kMagic), std::end(format::kMagic));
-  out.push_back(format::kVersion);
+  const bool table = content.flags & format::kFlagTableResiduals;
+  out.push_back(table ? format::kTableVersion : format::kVersion);
   out.push_back(content.flags);
   const size_t length_at = out.size();
   out.insert(out.end(), 4, 0);  // body length, filled in at the end
@@ -133,11 +135,19 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   const size_t motion_end = out.size();
 
   const bool lossless = content.flags & format::kFlagLossless;
+  assert(!(table && lossless));
   for (int axis = 0; axis < 3; ++axis) encoder.encode_direct_bits(float_bits(content.residual_step[axis]), 32);
-  if (!content.residuals.empty()) encode_residuals(encoder, content.residuals, content.welded_count, lossless);
+  std::vector<uint8_t> symbols;  // the table code's rANS words, after the body
+  if (!content.residuals.empty()) {
+    if (table)
+      encode_table_residuals(encoder, content.residuals, content.welded_count, symbols);
+    else
+      encode_residuals(encoder, content.residuals, content.welded_count, lossless);
+  }
   encoder.finish();
   const uint32_t length = uint32_t(out.size() - length_at - 4);
   for (int i = 0; i < 4; ++i) out[length_at + size_t(i)] = uint8_t(length >> (8 * i));
+  out.insert(out.end(), symbols.begin(), symbols.end());
   if (sizes) {
     sizes->motion = motion_end - start;
     sizes->residuals = out.size() - motion_end;
@@ -155,18 +165,28 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
   content_ = &content;
   if (size < format::kHeaderBytes || std::memcmp(data, format::kMagic, 4) != 0)
     return Status(StatusCode::bad_data, "not a segmorph animation stream (bad magic)");
-  if (data[4] != format::kVersion)
-    return Status(StatusCode::unsupported, "animation stream version " + std::to_string(data[4]) +
-                                               " (this decoder reads version " + std::to_string(format::kVersion) +
-                                               ")");
+  const uint8_t version = data[4];
+  if (version != format::kVersion && version != format::kTableVersion)
+    return Status(StatusCode::unsupported, "animation stream version " + std::to_string(version) +
+                                               " (this decoder reads versions " + std::to_string(format::kVersion) +
+                                               " to " + std::to_string(format::kNewestVersion) + ")");
   content.flags = data[5];
-  if (content.flags & ~format::kKnownFlags) return Status(StatusCode::bad_data, "animation stream has unknown flags");
+  const uint8_t known = version == format::kVersion ? format::kKnownFlags : format::kKnownTableVersionFlags;
+  if (content.flags & ~known) return Status(StatusCode::bad_data, "animation stream has unknown flags");
+  const bool table = content.flags & format::kFlagTableResiduals;
+  if (table && (content.flags & format::kFlagLossless))
+    return Status(StatusCode::bad_data, "animation stream: the table residual code in a lossless stream");
   const uint32_t length =
       uint32_t(data[6]) | uint32_t(data[7]) << 8 | uint32_t(data[8]) << 16 | uint32_t(data[9]) << 24;
-  if (length != size - format::kHeaderBytes)
-    return Status(StatusCode::bad_data, length > size - format::kHeaderBytes ? "animation stream is truncated"
-                                                                             : "animation stream has trailing bytes");
-  decoder_ = std::make_unique<RangeDecoder>(data + format::kHeaderBytes, size - format::kHeaderBytes);
+  // With the table code the rANS words follow the body: an even number of bytes, at least the states' 8.
+  const size_t available = size - format::kHeaderBytes;
+  if (table ? length > available || available - length < table_code::kMinSymbolBytes || (available - length) % 2 != 0
+            : length != available)
+    return Status(StatusCode::bad_data, length > available ? "animation stream is truncated"
+                                        : table ? "animation stream: bad length of the residual symbols after the body"
+                                                : "animation stream has trailing bytes");
+  body_size_ = length;
+  decoder_ = std::make_unique<RangeDecoder>(data + format::kHeaderBytes, length);
   RangeDecoder& decoder = *decoder_;
   Models models;
   auto corrupt = [](const std::string& what) { return Status(StatusCode::bad_data, "animation stream: " + what); };
@@ -265,12 +285,22 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
       return corrupt("bad residual quantizer step");
   }
   if (decoder.failed()) return decoder.finish();
+  if (table) {
+    const size_t start = format::kHeaderBytes + body_size_;
+    table_residuals_ = std::make_unique<TableResidualDecoder>(content.welded_count, data + start, size - start);
+    return table_residuals_->read_tables(decoder);
+  }
   residuals_ = std::make_unique<ResidualDecoder>(content.welded_count, lossless);
   return Status::Ok();
 }
 
 Status StreamReader::read_frame(int64_t* row) {
-  assert(residuals_);
+  assert(residuals_ || table_residuals_);
+  if (table_residuals_) {
+    table_residuals_->decode_frame(*decoder_, row);
+    if (decoder_->failed()) return decoder_->finish();
+    return table_residuals_->failed() ? table_residuals_->finish() : Status::Ok();
+  }
   residuals_->decode_frame(*decoder_, row);
   // Garbage decodes as fast as a stream: stop at the first sign of it.
   if (decoder_->failed()) return decoder_->finish();
@@ -285,7 +315,9 @@ Status StreamReader::read_frame(int64_t* row) {
 
 size_t StreamReader::frame_bound() const {
   assert(decoder_ && content_ && content_->welded_count > 0);
-  const size_t remaining = size_ - format::kHeaderBytes - std::min(decoder_->position(), size_ - format::kHeaderBytes);
+  if (table_residuals_)
+    return (size_ - format::kHeaderBytes - body_size_) * table_code::kVertexFramesPerByte / content_->welded_count + 1;
+  const size_t remaining = body_size_ - std::min(decoder_->position(), body_size_);
   return (remaining + kImplicitTailBytes + 1) * 364 / content_->welded_count + 1;
 }
 
@@ -296,7 +328,8 @@ size_t frames_to_reserve(size_t frames, size_t bound, size_t frame_bytes) {
 
 Status StreamReader::finish() const {
   assert(decoder_);
-  return decoder_->finish();
+  SEGMORPH_RETURN_IF_ERROR(decoder_->finish());
+  return table_residuals_ ? table_residuals_->finish() : Status::Ok();
 }
 
 Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& base, StreamContent& content) {

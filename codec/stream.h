@@ -12,6 +12,7 @@ namespace segmorph {
 
 class RangeDecoder;
 class ResidualDecoder;
+class TableResidualDecoder;
 
 struct StreamContent {
   uint8_t flags = 0;          // format::kFlag*
@@ -79,7 +80,8 @@ class StreamReader {
   Status finish() const;
 
   // After read_head(): the most frames the stream's remaining bytes can hold. Every welded vertex-frame costs
-  // at least one binary decision of probability at most 2017/2048 (0.022 bits), so a byte holds at most 364.
+  // at least one binary decision of probability at most 2017/2048 (0.022 bits), so a byte holds at most 364; in
+  // the table code a symbol of frequency at most 4032/4096 (table_code::kVertexFramesPerByte per byte).
   // frames_to_reserve() turns it into memory reserved up front.
   size_t frame_bound() const;
 
@@ -89,6 +91,8 @@ class StreamReader {
   const StreamContent* content_ = nullptr;
   std::unique_ptr<RangeDecoder> decoder_;
   std::unique_ptr<ResidualDecoder> residuals_;
+  std::unique_ptr<TableResidualDecoder> table_residuals_;  // instead of residuals_, with kFlagTableResiduals
+  size_t body_size_ = 0;                                   // the range-coded body's bytes
 };
 
 // Groups of vertices with bit-identical base positions, in order of their first vertex; each group lists its

@@ -8,14 +8,20 @@
 namespace segmorph::format {
 
 constexpr uint8_t kMagic[4] = {'S', 'G', 'M', 'A'};
+// Version 2 adds the flag kFlagTableResiduals (and the bytes after the body that it brings); a stream without it
+// is laid out the same in both versions, and the encoder writes it as version 1, which more decoders read.
 constexpr uint8_t kVersion = 1;
+constexpr uint8_t kTableVersion = 2;
+constexpr uint8_t kNewestVersion = kTableVersion;
 constexpr size_t kHeaderBytes = 10;  // magic, version, flags, body length (u32, little endian); the body follows
 
 // Flags byte.
 constexpr uint8_t kFlagLossless = 1 << 0;           // residuals code float bit patterns exactly
 constexpr uint8_t kFlagTemporalResiduals = 1 << 1;  // residuals are predicted from the previous frame's
 constexpr uint8_t kFlagSpatialResiduals = 1 << 2;   // residuals are predicted from already decoded neighbours
-constexpr uint8_t kKnownFlags = kFlagLossless | kFlagTemporalResiduals | kFlagSpatialResiduals;
+constexpr uint8_t kFlagTableResiduals = 1 << 3;     // version 2: residuals in the table code, after the body
+constexpr uint8_t kKnownFlags = kFlagLossless | kFlagTemporalResiduals | kFlagSpatialResiduals;  // version 1
+constexpr uint8_t kKnownTableVersionFlags = kKnownFlags | kFlagTableResiduals;                   // version 2
 
 // Limits a decoder enforces before allocating (a stream claiming more is refused as bad data).
 constexpr uint32_t kMaxClips = 4096;

@@ -31,7 +31,8 @@ const char* const kUsage =
     "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
     "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
-    "         [--normal-bits B] [--texcoord-bits B] [--skins keep|bake] [--targets auto|keep|bake] [--json]\n"
+    "         [--normal-bits B] [--texcoord-bits B] [--skins keep|bake] [--targets auto|keep|bake]\n"
+    "         [--fast-decode] [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
     "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
     "      (see --targets); a skinned mesh keeps its skin (see --skins). Meshes that animated nodes move\n"
@@ -54,6 +55,9 @@ const char* const kUsage =
     "  --bpvf R           encode: target bits per vertex per frame of the whole output, images and JSON\n"
     "                     included (it encodes twice: the first encode measures what the rest of the file takes)\n"
     "  --lossless         encode: restore the sampled frames bit for bit\n"
+    "  --fast-decode      encode: code the residuals for decoding speed (stream version 2, its table\n"
+    "                     code): about a third less decoding time, about 5 % more bytes at --error 0.15\n"
+    "                     and a quarter more at --error 0.5 (the cow; docs/codec.md). Not with --lossless\n"
     "  --clusters K       encode: number of motion clusters (default: automatic)\n"
     "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 22 (default: from\n"
     "                     the error target, at least 12; 14 with --bpvf or --lossless)\n"
@@ -631,6 +635,8 @@ int run(int argc, char** argv) {
       if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
       options.rate_given = true;
       options.codec.mode = RateMode::lossless;
+    } else if (arg == "--fast-decode") {
+      options.codec.table_residuals = true;
     } else if (arg == "--clusters" || arg == "--position-bits" || arg == "--normal-bits" || arg == "--texcoord-bits") {
       const bool clusters = arg == "--clusters";
       long low = 4, high = 30;  // --texcoord-bits
@@ -707,6 +713,8 @@ int run(int argc, char** argv) {
     if (!has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
     if (options.targets == Options::Targets::keep && options.codec.mode == RateMode::lossless)
       return usage_error("--targets keep is lossy: it cannot be combined with --lossless");
+    if (options.codec.table_residuals && options.codec.mode == RateMode::lossless)
+      return usage_error("--fast-decode codes lossy residuals: it cannot be combined with --lossless");
     return options.command == "encode" ? run_encode(options) : run_decode(options);
   }
   if (options.command == "verify") {
