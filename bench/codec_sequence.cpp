@@ -2,7 +2,7 @@
 // primitive is encoded against a stand-in base mesh (the first frame quantized to 14 bits over its bounding
 // box, as Draco's default position quantization would), decoded, and checked.
 //   codec_sequence FILE [--error E | --bpvf R | --lossless] [--clusters K] [--no-temporal] [--no-blend]
-//                       [--no-spatial] [--no-curvature-refinement] [--no-motion-refinement]
+//                       [--no-spatial] [--no-curvature-refinement] [--no-motion-refinement] [--fast-decode]
 // Prints one line: clusters, E(Π) before and after refinement, stream bytes (motion / residuals), bits per
 // vertex per frame of the stream alone, KG error and RMSE of the decoded frames, encoder and decoder
 // milliseconds, and whether the decoder reproduced the encoder's reconstruction exactly.
@@ -47,6 +47,8 @@ int main(int argc, char** argv) {
       settings.curvature_refinement = false;
     else if (arg == "--no-motion-refinement")
       settings.motion_refinement = false;
+    else if (arg == "--fast-decode")
+      settings.table_residuals = true;
     else {
       std::fprintf(stderr, "codec_sequence: unknown option %s\n", arg.c_str());
       return 2;

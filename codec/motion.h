@@ -93,10 +93,14 @@ class FramePredictor {
     Double2 rows01[4], row2[4];  // column c of [L | t]: rows 0 and 1, then row 2 and 0
   };
 
+  // With AVX (checked at run time): rows 0, 1 and 2 in three lanes of one 4-lane vector, the same way.
+  void predict_avx(size_t frame, double* out) const;
+
   const AffineMotion& motion_;
   std::vector<uint32_t> pair_offset_;  // W + 1 (ClusterWeights::offset)
   std::vector<Pair> pairs_;            // per (vertex, cluster) pair
   std::vector<uint32_t> cluster_;      // the pair's cluster
+  bool avx_;
 };
 
 }  // namespace segmorph

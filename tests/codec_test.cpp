@@ -41,24 +41,13 @@ FrameSequence bending_clip(size_t frames, double bend, double phase) {
   return clip;
 }
 
-// The base as a decoder would have it: the first frame on a grid of 1e-4 (as a 14-bit Draco quantization
-// of a shape this size).
-std::vector<float> quantized_base(const FrameSequence& clip) {
-  std::vector<float> base(clip.frame(0), clip.frame(0) + clip.vertex_count * 3);
-  for (float& x : base) x = float(std::round(x / 1e-4) * 1e-4);
-  return base;
-}
+using testing::kg;
+using testing::quantized_base;
 
 double bpvf(size_t bytes, const std::vector<FrameSequence>& clips) {
   size_t frames = 0;
   for (const FrameSequence& clip : clips) frames += clip.frame_count;
   return bits_per_vertex_frame(bytes, clips[0].vertex_count, frames);
-}
-
-double kg(const std::vector<FrameSequence>& original, const std::vector<FrameSequence>& decoded) {
-  ErrorAccumulator accumulator;
-  for (size_t c = 0; c < original.size(); ++c) accumulator.add(original[c], decoded[c]);
-  return accumulator.result().kg_percent;
 }
 
 struct Encoded {

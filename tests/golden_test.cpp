@@ -1,7 +1,7 @@
-// Golden files: small encoded files of each bitstream version (tests/golden/vN/) decode to the frames recorded
-// beside them, so that any change to the format, a model or the reconstruction arithmetic is deliberate: it
-// needs a new version (spec/README.md, "Version compatibility") and new golden files, and the old ones either
-// still decode or are retired with the version.
+// Golden files: small encoded files of each bitstream version the decoder reads (tests/golden/vN/, N from
+// format::kVersion to format::kNewestVersion) decode to the frames recorded beside them, so that any change to the
+// format, a model or the reconstruction arithmetic is deliberate: it needs a new version (spec/README.md, "Version
+// compatibility") and new golden files, and the old ones either still decode or are retired with the version.
 //
 // Each FILE.glb has FILE.frames: one line per animated primitive, "node primitive clips vertices frames
 // digest", digest the FNV-1a 64 of the bit patterns of every decoded position, clip by clip. To record them
@@ -74,21 +74,43 @@ std::string read_file(const std::string& path) {
   return text.str();
 }
 
+// Every version the decoder reads (format::kVersion to format::kNewestVersion) has its folder of golden files.
 TEST(Golden, EveryVersionsFilesDecodeToTheirFrames) {
-  const std::string directory = std::string(SEGMORPH_GOLDEN_DIR) + "/v" + std::to_string(format::kVersion);
-  const std::vector<std::string> files = testing::gltf_files_under(directory);
-  ASSERT_FALSE(files.empty()) << "no golden files for bitstream version " << int(format::kVersion) << " in "
-                              << directory << ": a new version needs them (see this file's comment)";
+  static_assert(format::kVersion <= format::kNewestVersion);
   const bool update = std::getenv("SEGMORPH_UPDATE_GOLDEN") != nullptr;
-  for (const std::string& file : files) {
-    const std::string expected_path = file.substr(0, file.rfind('.')) + ".frames";
-    const std::string actual = decoded_frames(file);
-    if (update) {
-      std::ofstream(expected_path, std::ios::binary) << actual;
-      continue;
+  for (int version = format::kVersion; version <= format::kNewestVersion; ++version) {
+    const std::string directory = std::string(SEGMORPH_GOLDEN_DIR) + "/v" + std::to_string(version);
+    const std::vector<std::string> files = testing::gltf_files_under(directory);
+    EXPECT_FALSE(files.empty()) << "no golden files for bitstream version " << version << " in " << directory
+                                << ": a new version needs them (see this file's comment)";
+    for (const std::string& file : files) {
+      const std::string expected_path = file.substr(0, file.rfind('.')) + ".frames";
+      const std::string actual = decoded_frames(file);
+      if (update) {
+        std::ofstream(expected_path, std::ios::binary) << actual;
+        continue;
+      }
+      EXPECT_EQ(actual, read_file(expected_path))
+          << file << " no longer decodes to the frames recorded in " << expected_path;
     }
-    EXPECT_EQ(actual, read_file(expected_path))
-        << file << " no longer decodes to the frames recorded in " << expected_path;
+  }
+}
+
+// Each version's folder holds streams of that version: a file of vN/ has a stream whose version byte is N (the
+// magic "SGMA", then the version), and none of another version.
+TEST(Golden, EveryVersionsFilesHoldStreamsOfThatVersion) {
+  for (int version = format::kVersion; version <= format::kNewestVersion; ++version) {
+    const std::string directory = std::string(SEGMORPH_GOLDEN_DIR) + "/v" + std::to_string(version);
+    for (const std::string& file : testing::gltf_files_under(directory)) {
+      const std::string bytes = read_file(file);
+      size_t streams = 0;
+      for (size_t at = bytes.find("SGMA"); at != std::string::npos && at + 4 < bytes.size();
+           at = bytes.find("SGMA", at + 1)) {
+        ++streams;
+        EXPECT_EQ(int(uint8_t(bytes[at + 4])), version) << file << ": a stream at byte " << at;
+      }
+      EXPECT_GT(streams, 0u) << file;
+    }
   }
 }
 

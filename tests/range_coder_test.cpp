@@ -1088,7 +1088,7 @@ TEST(ResidualCoding, VerticesAtRestCostOneLikelyDecisionEach) {
   EXPECT_EQ(decode_residual_stream(bytes, 1000, residuals.size(), false).values, residuals);
 }
 
-// The worked example of spec/entropy-coding.md section 9.2: four frames of two vertices.
+// The worked example of spec/entropy-coding.md section 10.2: four frames of two vertices.
 // clang-format off
 const std::vector<int64_t> kResidualExample = {
     0,                0,         0,  1, 0,  -1,  // frame 0: vertex 0, vertex 1

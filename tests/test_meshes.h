@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "frame_sequence.h"
+#include "metrics.h"
 
 namespace segmorph::testing {
 
@@ -81,6 +82,21 @@ FrameSequence height_field(int n, Height height, Hole hole) {
 template <typename Height>
 FrameSequence height_field(int n, Height height) {
   return height_field(n, height, [](int, int) { return false; });
+}
+
+// The base as a decoder would have it: the first frame on a grid of 1e-4 (as a 14-bit Draco quantization of a
+// shape a few units across).
+inline std::vector<float> quantized_base(const FrameSequence& clip) {
+  std::vector<float> base(clip.frame(0), clip.frame(0) + clip.vertex_count * 3);
+  for (float& x : base) x = float(std::round(x / 1e-4) * 1e-4);
+  return base;
+}
+
+// The KG error (%) of decoded clips against the originals.
+inline double kg(const std::vector<FrameSequence>& original, const std::vector<FrameSequence>& decoded) {
+  ErrorAccumulator accumulator;
+  for (size_t c = 0; c < original.size(); ++c) accumulator.add(original[c], decoded[c]);
+  return accumulator.result().kg_percent;
 }
 
 }  // namespace segmorph::testing

@@ -1,7 +1,8 @@
 // Writes the seed corpus of fuzz_animation_stream: valid streams of small synthetic animations of the fuzzer's
 // base mesh, one per codec configuration (lossy at several targets, lossless, fixed cluster counts, each residual
-// predictor on and off, several clips), so that mutations start from every path of the decoder. Each stream is
-// checked to decode to the encoder's reconstruction before it is written.
+// predictor on and off, several clips; version 1 with the adaptive residual code and version 2 with the table code),
+// so that mutations start from every path of the decoder. Each stream is checked to be of the version its settings
+// ask for and to decode to the encoder's reconstruction before it is written.
 //
 //   fuzz_seeds OUTPUT_DIRECTORY
 #include <cmath>
@@ -102,6 +103,12 @@ CodecSettings with_residuals(CodecSettings settings, bool temporal, bool spatial
   return settings;
 }
 
+// The residuals in the table code (stream version 2).
+CodecSettings table(CodecSettings settings) {
+  settings.table_residuals = true;
+  return settings;
+}
+
 // The paper's plain scheme: no refinements, no blending.
 CodecSettings plain(CodecSettings settings) {
   settings.curvature_refinement = false;
@@ -125,6 +132,12 @@ std::vector<Seed> seeds() {
       {"lossless_clusters_3_no_prediction", with_residuals(with_clusters(lossless(), 3), false, false), {5}},
       {"lossless_temporal_only", with_residuals(lossless(), true, false), {5}},
       {"lossless_spatial_only", with_residuals(plain(lossless()), false, true), {5}},
+      {"table_error_0.5", table(lossy(0.5)), {8}},
+      {"table_error_0.05", table(lossy(0.05)), {8}},
+      {"table_bpvf_4", table(bpvf(4)), {10}},
+      {"table_three_clips", table(lossy(0.15)), {6, 3, 1}},
+      {"table_clusters_1_no_prediction", table(with_residuals(with_clusters(lossy(0.15), 1), false, false)), {6}},
+      {"table_plain_temporal_only", table(with_residuals(plain(lossy(0.15)), true, false)), {7}},
   };
 }
 
@@ -150,6 +163,9 @@ int main(int argc, char** argv) {
     std::vector<uint8_t> stream;
     std::vector<FrameSequence> reconstruction, decoded;
     Status status = encode_animation(clips, mesh.positions, seed.settings, stream, nullptr, &reconstruction);
+    const int version = seed.settings.table_residuals ? 2 : 1;
+    if (status.ok() && (stream.size() < 5 || stream[4] != version))
+      status = Status(StatusCode::internal, "not a version-" + std::to_string(version) + " stream");
     if (status.ok()) status = decode_animation(stream.data(), stream.size(), mesh.positions, mesh.triangles, decoded);
     if (status.ok())
       for (size_t c = 0; c < clips.size(); ++c)
