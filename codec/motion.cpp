@@ -245,8 +245,14 @@ void predict_frame(const float* base, const AffineMotion& motion, const ClusterW
   FramePredictor(base, motion, weights).predict(frame, out);
 }
 
-FramePredictor::FramePredictor(const float* base, const AffineMotion& motion, const ClusterWeights& weights)
-    : motion_(motion), pair_offset_(weights.offset), cluster_(weights.cluster), avx_(__builtin_cpu_supports("avx")) {
+FramePredictor::FramePredictor(const float* base, const AffineMotion& motion, const ClusterWeights& weights,
+                               bool allow_avx)
+    : motion_(motion), pair_offset_(weights.offset), cluster_(weights.cluster), avx_(false) {
+#if defined(__x86_64__) || defined(__i386__)
+  avx_ = allow_avx && __builtin_cpu_supports("avx");
+#else
+  (void)allow_avx;
+#endif
   pairs_.reserve(weights.cluster.size());
   for (size_t v = 0; v + 1 < weights.offset.size(); ++v)
     for (uint32_t i = weights.offset[v]; i < weights.offset[v + 1]; ++i) {
@@ -257,12 +263,13 @@ FramePredictor::FramePredictor(const float* base, const AffineMotion& motion, co
     }
 }
 
+#if defined(__x86_64__) || defined(__i386__)
 // The same arithmetic as predict() with 4-lane vectors, compiled for AVX (without FMA, so nothing is fused): lane r
 // computes row r, lane 3 a copy of row 0 that is dropped.
 __attribute__((target("avx"))) void FramePredictor::predict_avx(size_t frame, double* out) const {
   typedef double Double4 __attribute__((vector_size(32), may_alias));
   const size_t vertex_count = pair_offset_.size() - 1, cluster_count = motion_.cluster_count;
-  // Per cluster, column c of [L | t]: rows 0, 1, 2 and 0, at a 32-byte boundary (std::allocator promises 16).
+  // Per cluster, column c of [L | t]: rows 0, 1, 2 and 0, at a 32-byte boundary (found in 4 doubles of slack).
   std::vector<double> storage(cluster_count * 16 + 4);
   double* aligned = reinterpret_cast<double*>((reinterpret_cast<uintptr_t>(storage.data()) + 31) & ~uintptr_t(31));
   for (size_t k = 0; k < cluster_count; ++k) {
@@ -286,8 +293,12 @@ __attribute__((target("avx"))) void FramePredictor::predict_avx(size_t frame, do
   }
 }
 
+#endif
+
 void FramePredictor::predict(size_t frame, double* out) const {
+#if defined(__x86_64__) || defined(__i386__)
   if (avx_) return predict_avx(frame, out);
+#endif
   // Term for term apply()'s expression (the spec fixes the order: the prediction is exact in double), rows 0 and 1
   // in the two lanes of one vector and row 2 in another: each lane performs the same IEEE operations in the same
   // order as the scalar expression, so the result is identical, with about half the instructions.

@@ -77,10 +77,12 @@ void predict_frame(const float* base, const AffineMotion& motion, const ClusterW
                    double* out);
 
 // predict_frame for frame after frame of one base, motion and weights (the motion must outlive it), with what does
-// not depend on the frame (each pair's x − c_k) computed once.
+// not depend on the frame (each pair's x − c_k) computed once. The same doubles as predict_frame, bit for bit, on
+// every path: two-lane vectors (SSE2 on x86-64, or what GCC's and Clang's vector extension makes of them elsewhere),
+// or, on x86 processors that have it and unless `allow_avx` is false (for tests), four-lane AVX vectors.
 class FramePredictor {
  public:
-  FramePredictor(const float* base, const AffineMotion& motion, const ClusterWeights& weights);
+  FramePredictor(const float* base, const AffineMotion& motion, const ClusterWeights& weights, bool allow_avx = true);
   void predict(size_t frame, double* out) const;
 
  private:
@@ -93,8 +95,10 @@ class FramePredictor {
     Double2 rows01[4], row2[4];  // column c of [L | t]: rows 0 and 1, then row 2 and 0
   };
 
+#if defined(__x86_64__) || defined(__i386__)
   // With AVX (checked at run time): rows 0, 1 and 2 in three lanes of one 4-lane vector, the same way.
   void predict_avx(size_t frame, double* out) const;
+#endif
 
   const AffineMotion& motion_;
   std::vector<uint32_t> pair_offset_;  // W + 1 (ClusterWeights::offset)

@@ -137,13 +137,13 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   const bool lossless = content.flags & format::kFlagLossless;
   assert(!(table && lossless));
   for (int axis = 0; axis < 3; ++axis) encoder.encode_direct_bits(float_bits(content.residual_step[axis]), 32);
+  // The table code's tables and initial states are written even without residuals (the encoder measures such
+  // streams for the size of everything but the residuals); the adaptive code writes nothing then.
   std::vector<uint8_t> symbols;  // the table code's rANS words, after the body
-  if (!content.residuals.empty()) {
-    if (table)
-      encode_table_residuals(encoder, content.residuals, content.welded_count, symbols);
-    else
-      encode_residuals(encoder, content.residuals, content.welded_count, lossless);
-  }
+  if (table)
+    encode_table_residuals(encoder, content.residuals, std::max<size_t>(content.welded_count, 1), symbols);
+  else if (!content.residuals.empty())
+    encode_residuals(encoder, content.residuals, content.welded_count, lossless);
   encoder.finish();
   const uint32_t length = uint32_t(out.size() - length_at - 4);
   for (int i = 0; i < 4; ++i) out[length_at + size_t(i)] = uint8_t(length >> (8 * i));
@@ -315,10 +315,15 @@ Status StreamReader::read_frame(int64_t* row) {
 
 size_t StreamReader::frame_bound() const {
   assert(decoder_ && content_ && content_->welded_count > 0);
-  if (table_residuals_)
-    return (size_ - format::kHeaderBytes - body_size_) * table_code::kVertexFramesPerByte / content_->welded_count + 1;
-  const size_t remaining = body_size_ - std::min(decoder_->position(), body_size_);
-  return (remaining + kImplicitTailBytes + 1) * 364 / content_->welded_count + 1;
+  // In 64 bits: a size_t of 32 bits would wrap for streams of a few megabytes.
+  uint64_t vertex_frames;
+  if (table_residuals_) {
+    vertex_frames = uint64_t(size_ - format::kHeaderBytes - body_size_) * table_code::kVertexFramesPerByte;
+  } else {
+    const size_t remaining = body_size_ - std::min(decoder_->position(), body_size_);
+    vertex_frames = (uint64_t(remaining) + kImplicitTailBytes + 1) * 364;
+  }
+  return size_t(std::min<uint64_t>(vertex_frames / content_->welded_count + 1, SIZE_MAX));
 }
 
 size_t frames_to_reserve(size_t frames, size_t bound, size_t frame_bytes) {

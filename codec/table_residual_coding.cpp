@@ -201,8 +201,11 @@ Status TableResidualDecoder::read_tables(RangeDecoder& body) {
 
 void TableResidualDecoder::decode_frame(RangeDecoder& body, int64_t* r) {
   assert(!slots_.empty());
+  // Members in locals: the stores below through uint8_t and int64_t pointers could otherwise alias them.
   const uint32_t* slots = slots_.data();
   uint8_t* history = history_.data();
+  const uint8_t* words = words_;
+  const size_t welded_count = welded_count_, word_count = word_count_;
   uint32_t x = state_[0], y = state_[1];
   size_t next = next_word_;
   // The vertices with a clamped axis (about one in seven at --error 0.15), listed without a branch and given their
@@ -210,13 +213,13 @@ void TableResidualDecoder::decode_frame(RangeDecoder& body, int64_t* r) {
   uint32_t* clamped = clamped_.data();
   size_t clamped_count = 0;
   int64_t* const row = r;
-  for (size_t w = 0; w < welded_count_; ++w, r += 3) {
+  for (size_t w = 0; w < welded_count; ++w, r += 3) {
     const uint32_t h = history[w];
     const uint32_t entry = slots[context_of(h) << kFrequencyBits | (x & (kTotal - 1))];
     x = ((entry >> 7) & 0x1FFFu) * (x >> kFrequencyBits) + (entry >> 20);
     // Renormalization without a branch: whether a state needs a word is a coin toss to the branch predictor. Past
     // the last word the words read as 0 and `next` still counts them (checked after the frame).
-    const uint32_t word = next < word_count_ ? uint32_t(words_[2 * next]) | uint32_t(words_[2 * next + 1]) << 8 : 0u;
+    const uint32_t word = next < word_count ? uint32_t(words[2 * next]) | uint32_t(words[2 * next + 1]) << 8 : 0u;
     const bool refill = x < kStateLow;
     x = refill ? x << 16 | word : x;
     next += refill;

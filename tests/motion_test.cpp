@@ -2,8 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <array>
+#include <cmath>
+#include <cstring>
 #include <random>
 
 #include "metrics.h"
@@ -160,6 +161,73 @@ TEST(Motion, WeightsRecoverASyntheticBlend) {
     double sum = 0;
     for (uint32_t i = weights.offset[v]; i < weights.offset[v + 1]; ++i) sum += weights.weight[i];
     EXPECT_NEAR(sum, 1.0, 1e-9);
+  }
+}
+
+// The prediction of spec/bitstream.md section 8.5, written as the specification writes it: one rounding per
+// operation, in its order (each step through a volatile double, so that the compiler can neither fuse nor reorder,
+// whatever the tests' flags).
+void spec_prediction(const std::vector<float>& base, const AffineMotion& motion, const ClusterWeights& weights,
+                     size_t frame, std::vector<double>& out) {
+  for (size_t v = 0; v + 1 < weights.offset.size(); ++v) {
+    volatile double s[3] = {0.0, 0.0, 0.0};
+    for (uint32_t i = weights.offset[v]; i < weights.offset[v + 1]; ++i) {
+      const size_t k = weights.cluster[i];
+      const double* t = motion.transform(frame, k);
+      double d[3];
+      for (size_t a = 0; a < 3; ++a) d[a] = double(base[v * 3 + a]) - motion.centroid[k * 3 + a];
+      double y[3];
+      for (size_t r = 0; r < 3; ++r) {
+        volatile double p0 = t[r * 4] * d[0], p1 = t[r * 4 + 1] * d[1];
+        volatile double s01 = p0 + p1, p2 = t[r * 4 + 2] * d[2];
+        volatile double s012 = s01 + p2;
+        y[r] = s012 + t[r * 4 + 3];
+      }
+      for (size_t r = 0; r < 3; ++r) {
+        volatile double product = weights.weight[i] * y[r];
+        s[r] = s[r] + product;
+      }
+    }
+    for (size_t r = 0; r < 3; ++r) out[v * 3 + r] = s[r];
+  }
+}
+
+// FramePredictor gives the specification's doubles bit for bit, on each of its paths: two-lane vectors and, where
+// the processor has it, AVX. Random transforms, weights and base positions of mixed magnitudes, so that any change of
+// operation order would round differently somewhere.
+TEST(Motion, FramePredictorPathsGiveTheScalarPredictionExactly) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const size_t vertices = 500, clusters = 7, frames = 5;
+  std::vector<float> base(vertices * 3);
+  for (float& x : base) x = float(unit(random) * std::pow(10.0, unit(random) * 3));
+  AffineMotion motion;
+  motion.cluster_count = clusters, motion.frame_count = frames;
+  for (size_t i = 0; i < clusters * 3; ++i) motion.centroid.push_back(unit(random) * 10);
+  for (size_t i = 0; i < frames * clusters * 12; ++i) motion.transforms.push_back(unit(random) * 3);
+  ClusterWeights weights;
+  weights.offset.push_back(0);
+  for (size_t v = 0; v < vertices; ++v) {
+    const size_t count = 1 + v % 4;  // 1 to 4 clusters per vertex
+    double rest = 1;
+    for (size_t j = 0; j < count; ++j) {
+      weights.cluster.push_back(uint32_t((v + j * 3) % clusters));
+      const double w = j + 1 == count ? rest : unit(random) * 0.5;
+      weights.weight.push_back(w);
+      rest -= w;
+    }
+    weights.offset.push_back(uint32_t(weights.cluster.size()));
+  }
+  const FramePredictor best(base.data(), motion, weights), two_lanes(base.data(), motion, weights, false);
+  std::vector<double> expected(vertices * 3), actual(vertices * 3);
+  for (size_t f = 0; f < frames; ++f) {
+    spec_prediction(base, motion, weights, f, expected);
+    for (const FramePredictor* predictor : {&best, &two_lanes}) {
+      std::fill(actual.begin(), actual.end(), 0.0);
+      predictor->predict(f, actual.data());
+      EXPECT_EQ(std::memcmp(actual.data(), expected.data(), expected.size() * sizeof(double)), 0)
+          << "frame " << f << (predictor == &best ? " (best path)" : " (two lanes)");
+    }
   }
 }
 
