@@ -77,8 +77,8 @@ void predict_frame(const float* base, const AffineMotion& motion, const ClusterW
                    double* out);
 
 // predict_frame for frame after frame of one base, motion and weights (the motion must outlive it), with what does
-// not depend on the frame (each pair's x − c_k) computed once. The same doubles as predict_frame, bit for bit, on
-// every path: two-lane vectors (SSE2 on x86-64, or what GCC's and Clang's vector extension makes of them elsewhere),
+// not depend on the frame (each pair's x − c_k) computed once. The doubles of spec/bitstream.md section 8.5, bit for
+// bit, on every path: two-lane vectors (SSE2 on x86-64, or what GCC's and Clang's vector extension makes of them elsewhere),
 // or, on x86 processors that have it and unless `allow_avx` is false (for tests), four-lane AVX vectors.
 class FramePredictor {
  public:

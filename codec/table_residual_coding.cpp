@@ -54,6 +54,21 @@ uint8_t next_history(uint32_t history, uint32_t nonzero) {
   return uint8_t(nonzero | (history & 7u) << 3);
 }
 
+// An entry of a context's decoding table, one per slot: the slot's symbol (bits 0–6), the symbol's frequency
+// (bits 7–19) and the slot's offset from the symbol's first slot (bits 20–31).
+uint32_t slot_entry(uint32_t symbol, uint32_t frequency, uint32_t offset) {
+  return symbol | frequency << 7 | offset << 20;
+}
+uint32_t entry_symbol(uint32_t entry) {
+  return entry & 0x7Fu;
+}
+uint32_t entry_frequency(uint32_t entry) {
+  return (entry >> 7) & 0x1FFFu;
+}
+uint32_t entry_offset(uint32_t entry) {
+  return entry >> 20;
+}
+
 // Frequencies summing to kTotal from symbol counts: every symbol seen gets at least 1, none more than kMaxFrequency;
 // a context never used codes the zero symbol. Encoder only (the stream carries the result).
 void normalize(const uint64_t* count, uint32_t* frequency) {
@@ -182,7 +197,7 @@ Status TableResidualDecoder::read_tables(RangeDecoder& body) {
       if (f > kMaxFrequency || cumulative + f > kTotal)
         return Status(StatusCode::bad_data, "animation stream: bad residual frequency table");
       for (uint32_t slot = cumulative; slot < cumulative + f; ++slot)
-        slots_[(size_t(c) << kFrequencyBits) + slot] = s | f << 7 | (slot - cumulative) << 20;
+        slots_[(size_t(c) << kFrequencyBits) + slot] = slot_entry(s, f, slot - cumulative);
       cumulative += f;
     }
     if (cumulative != kTotal) return Status(StatusCode::bad_data, "animation stream: bad residual frequency table");
@@ -216,7 +231,7 @@ void TableResidualDecoder::decode_frame(RangeDecoder& body, int64_t* r) {
   for (size_t w = 0; w < welded_count; ++w, r += 3) {
     const uint32_t h = history[w];
     const uint32_t entry = slots[context_of(h) << kFrequencyBits | (x & (kTotal - 1))];
-    x = ((entry >> 7) & 0x1FFFu) * (x >> kFrequencyBits) + (entry >> 20);
+    x = entry_frequency(entry) * (x >> kFrequencyBits) + entry_offset(entry);
     // Renormalization without a branch: whether a state needs a word is a coin toss to the branch predictor. Past
     // the last word the words read as 0 and `next` still counts them (checked after the frame).
     const uint32_t word = next < word_count ? uint32_t(words[2 * next]) | uint32_t(words[2 * next + 1]) << 8 : 0u;
@@ -224,7 +239,7 @@ void TableResidualDecoder::decode_frame(RangeDecoder& body, int64_t* r) {
     x = refill ? x << 16 | word : x;
     next += refill;
     std::swap(x, y);
-    const SymbolValues& v = kSymbolTable.symbol[entry & 0x7Fu];
+    const SymbolValues& v = kSymbolTable.symbol[entry_symbol(entry)];
     r[0] = v.value[0], r[1] = v.value[1], r[2] = v.value[2];
     history[w] = next_history(h, v.nonzero);
     clamped[clamped_count] = uint32_t(w);

@@ -66,9 +66,7 @@ class TableResidualDecoder {
   Status finish() const;
 
  private:
-  // Per context and slot: the symbol (bits 0–6), its frequency (bits 7–19) and the slot's offset from the
-  // symbol's first slot (bits 20–31).
-  std::vector<uint32_t> slots_;
+  std::vector<uint32_t> slots_;  // per context and slot, an entry (table_residual_coding.cpp, slot_entry)
   size_t welded_count_;
   const uint8_t* words_;  // little-endian 16-bit words
   size_t word_count_;

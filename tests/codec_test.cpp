@@ -50,19 +50,8 @@ double bpvf(size_t bytes, const std::vector<FrameSequence>& clips) {
   return bits_per_vertex_frame(bytes, clips[0].vertex_count, frames);
 }
 
-struct Encoded {
-  std::vector<uint8_t> stream;
-  EncodeReport report;
-  std::vector<FrameSequence> reconstruction;
-};
-
-Encoded encode(const std::vector<FrameSequence>& clips, const std::vector<float>& base, const CodecSettings& settings) {
-  Encoded encoded;
-  const Status status =
-      encode_animation(clips, base, settings, encoded.stream, &encoded.report, &encoded.reconstruction);
-  EXPECT_TRUE(status.ok()) << status.message();
-  return encoded;
-}
+using testing::Encoded;
+using testing::encode;
 
 TEST(Codec, DecodingGivesTheEncodersReconstructionExactly) {
   const std::vector<FrameSequence> clips = {bending_clip(30, 1.0, 0)};

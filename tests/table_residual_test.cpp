@@ -84,17 +84,8 @@ std::vector<FrameSequence> with_copies(std::vector<FrameSequence> clips) {
   return clips;
 }
 
-struct Encoded {
-  std::vector<uint8_t> stream;
-  std::vector<FrameSequence> reconstruction;
-};
-
-Encoded encode(const std::vector<FrameSequence>& clips, const std::vector<float>& base, const CodecSettings& settings) {
-  Encoded encoded;
-  const Status status = encode_animation(clips, base, settings, encoded.stream, nullptr, &encoded.reconstruction);
-  EXPECT_TRUE(status.ok()) << status.message();
-  return encoded;
-}
+using testing::Encoded;
+using testing::encode;
 
 CodecSettings table(CodecSettings settings) {
   settings.table_residuals = true;

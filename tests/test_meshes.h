@@ -1,4 +1,4 @@
-// Small synthetic meshes for the codec's tests.
+// Small synthetic meshes for the codec's tests, and the helpers its tests share.
 #pragma once
 
 #include <algorithm>
@@ -8,6 +8,9 @@
 #include <map>
 #include <vector>
 
+#include <gtest/gtest.h>
+
+#include "codec.h"
 #include "frame_sequence.h"
 #include "metrics.h"
 
@@ -97,6 +100,22 @@ inline double kg(const std::vector<FrameSequence>& original, const std::vector<F
   ErrorAccumulator accumulator;
   for (size_t c = 0; c < original.size(); ++c) accumulator.add(original[c], decoded[c]);
   return accumulator.result().kg_percent;
+}
+
+// An encode that is expected to succeed: the stream, the encoder's report and its own reconstruction.
+struct Encoded {
+  std::vector<uint8_t> stream;
+  EncodeReport report;
+  std::vector<FrameSequence> reconstruction;
+};
+
+inline Encoded encode(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
+                      const CodecSettings& settings) {
+  Encoded encoded;
+  const Status status =
+      encode_animation(clips, base, settings, encoded.stream, &encoded.report, &encoded.reconstruction);
+  EXPECT_TRUE(status.ok()) << status.message();
+  return encoded;
 }
 
 }  // namespace segmorph::testing
