@@ -21,6 +21,7 @@
 #include "sample.h"
 #include "segmentation.h"
 #include "stand_in_base.h"
+#include "segmorph/decoder_c.h"
 #include "stream.h"
 #include "topology.h"
 
@@ -193,6 +194,49 @@ void DecodeEntropy(benchmark::State& state) {
   vertex_frame_rate(state);
 }
 BENCHMARK(DecodeEntropy)->Unit(benchmark::kMillisecond);
+
+// The runtime decoder's C API (include/segmorph/decoder_c.h), as a player that keeps every frame uses it: open the
+// stream, each clip into memory the caller allocated beforehand.
+void DecodeApiClips(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  segmorph_decoder* decoder = segmorph_decoder_create();
+  std::vector<std::vector<float>> clips;
+  for (const FrameSequence& clip : f.clips) clips.emplace_back(clip.positions.size());
+  for (auto _ : state) {
+    segmorph_status status = segmorph_decoder_open(decoder, f.stream.data(), f.stream.size(), f.base.data(),
+                                                   f.base.size() / 3, f.clips[0].triangles.data(),
+                                                   f.clips[0].triangles.size());
+    for (size_t c = 0; status == SEGMORPH_STATUS_OK && c < clips.size(); ++c)
+      status = segmorph_decode_clip(decoder, c, clips[c].data(), clips[c].size());
+    benchmark::DoNotOptimize(clips.data());
+    if (status != SEGMORPH_STATUS_OK) state.SkipWithError(segmorph_decoder_message(decoder));
+  }
+  segmorph_decoder_destroy(decoder);
+  vertex_frame_rate(state);
+}
+BENCHMARK(DecodeApiClips)->Unit(benchmark::kMillisecond);
+
+// The C API as a streaming player uses it: open the stream, then every frame into one V × 3 buffer.
+void DecodeApiFrames(benchmark::State& state) {
+  const Fixture& f = *fixture;
+  segmorph_decoder* decoder = segmorph_decoder_create();
+  std::vector<float> frame(f.base.size());
+  size_t frames = 0;
+  for (const FrameSequence& clip : f.clips) frames += clip.frame_count;
+  for (auto _ : state) {
+    segmorph_status status = segmorph_decoder_open(decoder, f.stream.data(), f.stream.size(), f.base.data(),
+                                                   f.base.size() / 3, f.clips[0].triangles.data(),
+                                                   f.clips[0].triangles.size());
+    for (size_t i = 0; status == SEGMORPH_STATUS_OK && i < frames; ++i) {
+      status = segmorph_decode_frame(decoder, frame.data(), frame.size());
+      benchmark::DoNotOptimize(frame.data());
+    }
+    if (status != SEGMORPH_STATUS_OK) state.SkipWithError(segmorph_decoder_message(decoder));
+  }
+  segmorph_decoder_destroy(decoder);
+  vertex_frame_rate(state);
+}
+BENCHMARK(DecodeApiFrames)->Unit(benchmark::kMillisecond);
 
 // The stream up to its residuals: header, welding, labels, motion, weights.
 void DecodeHead(benchmark::State& state) {

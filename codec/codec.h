@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "frame_sequence.h"
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

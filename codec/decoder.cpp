@@ -1,27 +1,17 @@
-// decode_animation: the stream's content, then frame by frame the prediction and the residual loop, each frame
-// written straight into the clips' original vertex order.
+// The decoder: FrameLoop (prediction and the residual loop, each frame written straight into the base mesh's vertex
+// order), FrameDecoder (a stream frame by frame, with checkpoints at clip starts), and decode_animation and
+// reconstruct_clips on top of them.
+#include "frame_decoder.h"
+
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
-#include <functional>
 
 #include "codec.h"
-#include "reconstruction.h"
+#include "stream_format.h"
 
 namespace segmorph {
-
-Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
-                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
-  if (base.size() % 3 != 0) return Status(StatusCode::invalid_argument, "base positions must be V × 3");
-  for (uint32_t index : triangles)
-    if (index >= base.size() / 3) return Status(StatusCode::invalid_argument, "a triangle names a missing vertex");
-  StreamContent content;
-  StreamReader reader(data, size);
-  SEGMORPH_RETURN_IF_ERROR(reader.read_head(base, content));
-  SEGMORPH_RETURN_IF_ERROR(reconstruct_clips(content, reader, base, triangles, clips));
-  return reader.finish();
-}
-
 namespace {
 
 // Whether no float of x[0 .. count) is infinite or NaN (exponent bits all ones), four at a time (GCC's and Clang's
@@ -41,97 +31,233 @@ bool all_finite(const float* x, size_t count) {
   return finite;
 }
 
-// Frame `frame`'s W × 3 residual symbols into `row`.
-using ResidualSource = std::function<Status(size_t frame, int64_t* row)>;
+Status not_finite() { return Status(StatusCode::bad_data, "animation stream decodes to NaN or infinite positions"); }
 
-// frame_bound: how many frames the residuals can hold at most (frames_to_reserve).
-Status reconstruct(const StreamContent& content, const ResidualSource& residuals, size_t frame_bound,
-                   const std::vector<float>& base, const std::vector<uint32_t>& triangles,
-                   std::vector<FrameSequence>& clips) {
-  const std::vector<float> welded = welded_base(base, content);
-  const AffineMotion motion = dequantized_motion(content, welded);
-  const ClusterWeights weights = dequantized_weights(content);
-  const ResidualTraversal traversal = residual_traversal(content, triangles);
-  ResidualReconstructor reconstructor(content, traversal);
-  const FramePredictor predictor(welded.data(), motion, weights);
+// Checkpoints of clip starts take at most this much memory in all (FrameDecoder::seek).
+constexpr size_t kMaxCheckpointBytes = size_t(64) << 20;
 
-  // Two frames at a time (ResidualReconstructor::two_frames), so that what the loop reads in traversal order
-  // (predictions, symbols) and writes (welded positions) stays in cache.
-  const size_t vertex_count = content.vertex_count, row = size_t(content.welded_count) * 3;
-  std::vector<double> predictions(2 * row);
-  std::vector<int64_t> symbols(2 * row);
-  std::vector<float> welded_frames(2 * row);
-  // Frame `frame` of the stream into slot s (0 or 1) of the buffers: prediction and symbols.
-  auto prepare = [&](size_t frame, size_t s) {
-    predictor.predict(frame, &predictions[s * row]);
-    return residuals(frame, &symbols[s * row]);
-  };
+}  // namespace
+
+FrameLoop::FrameLoop(const StreamContent& content, const std::vector<float>& base,
+                     const std::vector<uint32_t>& triangles)
+    : content_(content),
+      welded_(welded_base(base, content)),
+      motion_(dequantized_motion(content, welded_)),
+      weights_(dequantized_weights(content)),
+      traversal_(residual_traversal(content, triangles)),
+      reconstructor_(content, traversal_),
+      predictor_(welded_.data(), motion_, weights_),
+      row_(size_t(content.welded_count) * 3),
+      predictions_(2 * row_),
+      symbols_(2 * row_),
+      welded_frames_(2 * row_) {
+  const size_t vertex_count = content.vertex_count;
+  bool long_runs = true;
+  for (size_t v = 0; v < vertex_count && long_runs; ++v) {
+    const size_t w = content.welded_index[v];
+    if (!runs_.empty() && runs_.back().welded + runs_.back().count == w)
+      ++runs_.back().count;
+    else
+      runs_.push_back({w, 1});
+    long_runs = runs_.size() * 8 <= vertex_count;
+  }
+  if (!long_runs) runs_.clear();
+}
+
+void FrameLoop::start_clip() { reconstructor_.start_clip(); }
+
+Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two) {
+  const size_t count = two ? 2 : 1;
+  for (size_t s = 0; s < count; ++s) {
+    predictor_.predict(frame + s, &predictions_[s * row_]);
+    SEGMORPH_RETURN_IF_ERROR(residuals(frame + s, &symbols_[s * row_]));
+  }
   auto symbol = [&](size_t s) {
-    const int64_t* from = &symbols[s * row];
+    const int64_t* from = &symbols_[s * row_];
     return [from](size_t i, double, double) { return from[i]; };
   };
   auto output = [&](size_t s) {
-    float* to = &welded_frames[s * row];
+    float* to = &welded_frames_[s * row_];
     return [to](size_t i, float x) { to[i] = x; };
   };
-  // Slot s, reconstructed, appended to its clip in the original vertex order: run by run, a run being vertices
-  // v, v + 1, ... whose welded vertices are w, w + 1, ... (usually few and long), so that the frame is copied
-  // without a gather or a zero-filling resize.
-  struct Run {
-    size_t welded, count;
-  };
-  std::vector<Run> runs;
-  bool long_runs = true;  // else vertex by vertex
-  for (size_t v = 0; v < vertex_count && long_runs; ++v) {
-    const size_t w = content.welded_index[v];
-    if (!runs.empty() && runs.back().welded + runs.back().count == w)
-      ++runs.back().count;
-    else
-      runs.push_back({w, 1});
-    long_runs = runs.size() * 8 <= vertex_count;
+  if (two)
+    reconstructor_.two_frames(&predictions_[0], symbol(0), output(0), &predictions_[row_], symbol(1), output(1));
+  else
+    reconstructor_.frame(&predictions_[0], symbol(0), output(0));
+  for (size_t s = 0; s < count; ++s)
+    if (!finite(s)) return not_finite();
+  return Status::Ok();
+}
+
+bool FrameLoop::finite(size_t slot) const { return all_finite(&welded_frames_[slot * row_], row_); }
+
+void FrameLoop::write(size_t slot, float* out) const {
+  const float* frame = &welded_frames_[slot * row_];
+  if (!runs_.empty()) {
+    for (const Run& run : runs_) {
+      std::memcpy(out, frame + run.welded * 3, run.count * 3 * sizeof(float));
+      out += run.count * 3;
+    }
+    return;
   }
-  if (!long_runs) runs.clear();
-  auto finish = [&](size_t s, FrameSequence& clip) {
-    const float* frame = &welded_frames[s * row];
-    if (!all_finite(frame, row)) return false;
-    if (long_runs) {
-      for (const Run& run : runs)
-        clip.positions.insert(clip.positions.end(), frame + run.welded * 3, frame + (run.welded + run.count) * 3);
-      return true;
+  for (size_t v = 0; v < content_.vertex_count; ++v) {
+    const float* in = &frame[size_t(content_.welded_index[v]) * 3];
+    out[v * 3] = in[0], out[v * 3 + 1] = in[1], out[v * 3 + 2] = in[2];
+  }
+}
+
+void FrameLoop::append(size_t slot, std::vector<float>& out) const {
+  const float* frame = &welded_frames_[slot * row_];
+  if (!runs_.empty()) {
+    for (const Run& run : runs_) out.insert(out.end(), frame + run.welded * 3, frame + (run.welded + run.count) * 3);
+    return;
+  }
+  const size_t at = out.size();
+  out.resize(at + size_t(content_.vertex_count) * 3);
+  write(slot, &out[at]);
+}
+
+Status FrameLoop::decode(size_t frame, const Residuals& residuals, float* first, float* second) {
+  SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, second != nullptr));
+  write(0, first);
+  if (second) write(1, second);
+  return Status::Ok();
+}
+
+Status FrameLoop::decode_append(size_t frame, const Residuals& residuals, bool two, std::vector<float>& out) {
+  SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, two));
+  append(0, out);
+  if (two) append(1, out);
+  return Status::Ok();
+}
+
+FrameDecoder::FrameDecoder() = default;
+FrameDecoder::~FrameDecoder() = default;
+
+Status FrameDecoder::open(const uint8_t* data, size_t size, const std::vector<float>& base,
+                          const std::vector<uint32_t>& triangles) {
+  loop_.reset();
+  checkpoints_.clear();
+  checkpoint_bytes_ = 0;
+  clip_ = frame_in_clip_ = frame_ = 0;
+  version_ = 0;
+  failure_ = Status::Ok();
+  reader_ = std::make_unique<StreamReader>(data, size);
+  const Status status = reader_->read_head(base, content_);
+  if (!status.ok()) {
+    reader_.reset();
+    return status;
+  }
+  version_ = data[4];
+  frame_bound_ = reader_->frame_bound();
+  loop_ = std::make_unique<FrameLoop>(content_, base, triangles);
+  StreamReader* reader = reader_.get();
+  residuals_ = [reader](size_t, int64_t* row) { return reader->read_frame(row); };
+  checkpoints_.resize(content_.clip_frames.size());
+  take_checkpoint();
+  loop_->start_clip();
+  return Status::Ok();
+}
+
+size_t FrameDecoder::frames_left_in_clip() const {
+  return clip_ < content_.clip_frames.size() ? content_.clip_frames[clip_] - frame_in_clip_ : 0;
+}
+
+void FrameDecoder::take_checkpoint() {
+  if (checkpoints_[clip_]) return;
+  StreamReader::CheckpointPointer checkpoint = reader_->checkpoint();
+  const size_t bytes = StreamReader::checkpoint_bytes(*checkpoint);
+  // The first clip's is always kept: it is how the decoder goes back to the start.
+  if (clip_ > 0 && checkpoint_bytes_ + bytes > kMaxCheckpointBytes) return;
+  checkpoint_bytes_ += bytes;
+  checkpoints_[clip_] = std::move(checkpoint);
+}
+
+Status FrameDecoder::before_decode(bool two) {
+  assert(is_open());
+  if (!failure_.ok()) return failure_;
+  const size_t left = frames_left_in_clip();
+  if (left == 0) return Status(StatusCode::invalid_argument, "the stream has no frame left to decode");
+  if (two && left < 2) return Status(StatusCode::invalid_argument, "two frames asked for where the clip has one left");
+  return Status::Ok();
+}
+
+// Advances past `count` decoded frames; at a clip's end, to the next clip (a checkpoint of its start), and at the
+// stream's end, the check that the stream ends there.
+Status FrameDecoder::after_decode(Status status, size_t count) {
+  if (status.ok()) {
+    frame_ += count;
+    frame_in_clip_ += count;
+    if (frame_in_clip_ == content_.clip_frames[clip_]) {
+      ++clip_;
+      frame_in_clip_ = 0;
+      if (clip_ < content_.clip_frames.size()) {
+        take_checkpoint();
+        loop_->start_clip();
+      } else {
+        status = reader_->finish();
+      }
     }
-    const size_t at = clip.positions.size();
-    clip.positions.resize(at + vertex_count * 3);
-    for (size_t v = 0; v < vertex_count; ++v) {
-      const float* in = &frame[size_t(content.welded_index[v]) * 3];
-      float* out = &clip.positions[at + v * 3];
-      out[0] = in[0], out[1] = in[1], out[2] = in[2];
-    }
-    return true;
-  };
+  }
+  if (!status.ok()) failure_ = status;
+  return status;
+}
+
+Status FrameDecoder::decode(float* first, float* second) {
+  SEGMORPH_RETURN_IF_ERROR(before_decode(second != nullptr));
+  return after_decode(loop_->decode(frame_, residuals_, first, second), second ? 2 : 1);
+}
+
+Status FrameDecoder::decode_append(bool two, std::vector<float>& out) {
+  SEGMORPH_RETURN_IF_ERROR(before_decode(two));
+  return after_decode(loop_->decode_append(frame_, residuals_, two, out), two ? 2 : 1);
+}
+
+Status FrameDecoder::skip_frame() {
+  scratch_.resize(size_t(content_.vertex_count) * 3);
+  const bool two = frames_left_in_clip() >= 2;
+  if (two) scratch_.resize(scratch_.size() * 2);
+  return decode(scratch_.data(), two ? scratch_.data() + size_t(content_.vertex_count) * 3 : nullptr);
+}
+
+Status FrameDecoder::seek(size_t clip) {
+  assert(is_open());
+  if (!failure_.ok()) return failure_;
+  if (clip >= content_.clip_frames.size()) return Status(StatusCode::invalid_argument, "no such clip");
+  if (clip == clip_ && frame_in_clip_ == 0) return Status::Ok();
+  // The nearest checkpoint at or before the clip, unless the decoder is already between it and the clip.
+  size_t from = clip;
+  while (!checkpoints_[from]) --from;  // checkpoints_[0] always exists
+  if (!(clip_ >= from && clip_ < clip)) {
+    reader_->restore(*checkpoints_[from]);
+    size_t frame = 0;
+    for (size_t c = 0; c < from; ++c) frame += content_.clip_frames[c];
+    clip_ = from, frame_in_clip_ = 0, frame_ = frame;
+    loop_->start_clip();
+  }
+  while (clip_ < clip) SEGMORPH_RETURN_IF_ERROR(skip_frame());
+  return Status::Ok();
+}
+
+namespace {
+
+// `clips` filled with the clips of `content`: at each clip's start begin_clip(clip, frame) returns how many floats to
+// reserve, then its frames are appended two at a time (one at a clip's odd end) by append(frame, two, positions);
+// frame counts the stream's frames.
+template <typename BeginClip, typename Append>
+Status collect_clips(const StreamContent& content, BeginClip begin_clip, Append append,
+                     std::vector<FrameSequence>& clips) {
   clips.assign(content.clip_frames.size(), FrameSequence());
-  size_t frame = 0;  // in the stream
+  size_t frame = 0;
   for (size_t c = 0; c < clips.size(); ++c) {
     FrameSequence& clip = clips[c];
-    clip.vertex_count = vertex_count;
+    clip.vertex_count = content.vertex_count;
     clip.frame_count = content.clip_frames[c];
-    // The frames grow as they are decoded, never sized by the counts alone: a stream of a few bytes can claim
-    // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.
-    const size_t frame_floats = vertex_count * 3;
-    clip.positions.reserve(
-        frames_to_reserve(clip.frame_count, frame_bound - std::min(frame, frame_bound), frame_floats * sizeof(float)) *
-        frame_floats);
-    reconstructor.start_clip();
+    clip.positions.reserve(begin_clip(c, frame));
     for (size_t f = 0; f < clip.frame_count;) {
-      const size_t count = std::min<size_t>(2, clip.frame_count - f);
-      for (size_t s = 0; s < count; ++s) SEGMORPH_RETURN_IF_ERROR(prepare(frame + s, s));
-      if (count == 2)
-        reconstructor.two_frames(&predictions[0], symbol(0), output(0), &predictions[row], symbol(1), output(1));
-      else
-        reconstructor.frame(&predictions[0], symbol(0), output(0));
-      for (size_t s = 0; s < count; ++s)
-        if (!finish(s, clip))
-          return Status(StatusCode::bad_data, "animation stream decodes to NaN or infinite positions");
-      f += count, frame += count;
+      const bool two = clip.frame_count - f >= 2;
+      SEGMORPH_RETURN_IF_ERROR(append(frame, two, clip.positions));
+      f += two ? 2 : 1, frame += two ? 2 : 1;
     }
   }
   return Status::Ok();
@@ -144,18 +270,38 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
   const size_t row = size_t(content.welded_count) * 3;
   if (content.residuals.size() != content.frame_count() * row)
     return Status(StatusCode::invalid_argument, "stream content has the wrong number of residuals");
-  auto copy = [&](size_t frame, int64_t* to) {
+  FrameLoop loop(content, base, triangles);
+  const FrameLoop::Residuals copy = [&](size_t frame, int64_t* to) {
     std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, to);
     return Status::Ok();
   };
-  return reconstruct(content, copy, content.frame_count(), base, triangles, clips);
+  auto begin_clip = [&](size_t c, size_t) {
+    loop.start_clip();
+    return size_t(content.clip_frames[c]) * content.vertex_count * 3;  // the residuals are in memory: so can they be
+  };
+  auto append = [&](size_t frame, bool two, std::vector<float>& positions) {
+    return loop.decode_append(frame, copy, two, positions);
+  };
+  return collect_clips(content, begin_clip, append, clips);
 }
 
-Status reconstruct_clips(const StreamContent& content, StreamReader& reader, const std::vector<float>& base,
-                         const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
-  return reconstruct(
-      content, [&](size_t, int64_t* row) { return reader.read_frame(row); }, reader.frame_bound(), base, triangles,
-      clips);
+Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
+                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
+  if (base.size() % 3 != 0) return Status(StatusCode::invalid_argument, "base positions must be V × 3");
+  for (uint32_t index : triangles)
+    if (index >= base.size() / 3) return Status(StatusCode::invalid_argument, "a triangle names a missing vertex");
+  FrameDecoder decoder;
+  SEGMORPH_RETURN_IF_ERROR(decoder.open(data, size, base, triangles));
+  const StreamContent& content = decoder.content();
+  // The frames grow as they are decoded, never sized by the counts alone: a stream of a few bytes can claim
+  // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.
+  const size_t frame_floats = size_t(content.vertex_count) * 3, bound = decoder.frame_bound();
+  auto begin_clip = [&](size_t c, size_t frame) {  // the decoder starts each clip itself
+    return frames_to_reserve(content.clip_frames[c], bound - std::min(frame, bound), frame_floats * sizeof(float)) *
+           frame_floats;
+  };
+  auto append = [&](size_t, bool two, std::vector<float>& positions) { return decoder.decode_append(two, positions); };
+  return collect_clips(content, begin_clip, append, clips);
 }
 
 }  // namespace segmorph

@@ -23,7 +23,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "status.h"
+#include "segmorph/status.h"
 #include "topology.h"
 
 namespace segmorph {

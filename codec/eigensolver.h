@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "laplacian.h"
-#include "status.h"
+#include "segmorph/status.h"
 #include "topology.h"
 
 namespace segmorph {

@@ -22,7 +22,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 
@@ -194,6 +194,17 @@ class RangeDecoder {
 
   // Bytes consumed so far, counting the implicit zero bytes (and any beyond) that were read past the end.
   size_t position() const { return position_; }
+
+  // The decoder's state between two symbols, to come back to it later (the caller keeps the models' states).
+  struct State {
+    size_t position;
+    uint32_t range, code;
+    const char* invalid_reason;
+  };
+  State state() const { return {position_, range_, code_, invalid_reason_}; }
+  void restore(const State& state) {
+    position_ = state.position, range_ = state.range, code_ = state.code, invalid_reason_ = state.invalid_reason;
+  }
 
  private:
   uint32_t next_byte() {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "frame_sequence.h"
-#include "motion.h"
+#include "prediction.h"
 #include "stream.h"
 
 namespace segmorph {
@@ -92,13 +92,9 @@ class ResidualReconstructor {
 };
 
 // The clips (original vertex order) of a content read by read_stream against `base`, with the base mesh's
-// triangles (the decoder's stage after entropy decoding). Fails when a position decodes to NaN or infinity.
+// triangles (the decoder's stage after entropy decoding; frame_decoder.h's FrameLoop). Fails when a position decodes
+// to NaN or infinity.
 Status reconstruct_clips(const StreamContent& content, const std::vector<float>& base,
-                         const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips);
-
-// The same with the residuals coming from `reader` a frame at a time (content: its read_head(); its residuals
-// are not used): the decoder's one pass. Does not call reader.finish().
-Status reconstruct_clips(const StreamContent& content, StreamReader& reader, const std::vector<float>& base,
                          const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips);
 
 }  // namespace segmorph

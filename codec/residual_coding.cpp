@@ -169,7 +169,17 @@ ResidualDecoder::ResidualDecoder(size_t welded_count, bool lossless)
       models_(std::make_unique<ResidualModels>()),
       history_(welded_count * 3, 0) {}
 
+ResidualDecoder::ResidualDecoder(const ResidualDecoder& other)
+    : welded_count_(other.welded_count_),
+      lossless_(other.lossless_),
+      models_(std::make_unique<ResidualModels>(*other.models_)),
+      history_(other.history_) {}
+
 ResidualDecoder::~ResidualDecoder() = default;
+
+size_t ResidualDecoder::state_bytes() const {
+  return sizeof(ResidualDecoder) + sizeof(ResidualModels) + history_.size();
+}
 
 void ResidualDecoder::decode_frame(RangeDecoder& decoder, int64_t* r) {
   ResidualModels& models = *models_;

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "range_coder.h"
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 
@@ -36,8 +36,12 @@ class ResidualDecoder {
  public:
   ResidualDecoder(size_t welded_count, bool lossless);
   ~ResidualDecoder();
-  ResidualDecoder(const ResidualDecoder&) = delete;
+  // A copy decodes on from where this one is (its models and history are copied): a checkpoint.
+  ResidualDecoder(const ResidualDecoder& other);
   ResidualDecoder& operator=(const ResidualDecoder&) = delete;
+
+  // Bytes a copy holds (for a caller that bounds what its checkpoints take).
+  size_t state_bytes() const;
 
   // The next frame's W × 3 symbols into row[0 .. W × 3).
   void decode_frame(RangeDecoder& decoder, int64_t* row);

@@ -326,6 +326,40 @@ size_t StreamReader::frame_bound() const {
   return size_t(std::min<uint64_t>(vertex_frames / content_->welded_count + 1, SIZE_MAX));
 }
 
+struct StreamReader::Checkpoint {
+  RangeDecoder::State range;
+  std::unique_ptr<ResidualDecoder> residuals;  // a copy; or, with the table code:
+  TableResidualDecoder::Position table;
+  size_t bytes = 0;
+};
+
+void StreamReader::CheckpointDeleter::operator()(Checkpoint* checkpoint) const { delete checkpoint; }
+
+StreamReader::CheckpointPointer StreamReader::checkpoint() const {
+  assert(decoder_ && (residuals_ || table_residuals_));
+  CheckpointPointer checkpoint(new Checkpoint);
+  checkpoint->range = decoder_->state();
+  if (table_residuals_) {
+    checkpoint->table = table_residuals_->position();
+    checkpoint->bytes = sizeof(Checkpoint) + checkpoint->table.history.size();
+  } else {
+    checkpoint->residuals = std::make_unique<ResidualDecoder>(*residuals_);
+    checkpoint->bytes = sizeof(Checkpoint) + residuals_->state_bytes();
+  }
+  return checkpoint;
+}
+
+void StreamReader::restore(const Checkpoint& checkpoint) {
+  assert(decoder_ && (residuals_ || table_residuals_));
+  decoder_->restore(checkpoint.range);
+  if (table_residuals_)
+    table_residuals_->restore(checkpoint.table);
+  else
+    residuals_ = std::make_unique<ResidualDecoder>(*checkpoint.residuals);
+}
+
+size_t StreamReader::checkpoint_bytes(const Checkpoint& checkpoint) { return checkpoint.bytes; }
+
 size_t frames_to_reserve(size_t frames, size_t bound, size_t frame_bytes) {
   constexpr size_t kMaxReservedBytes = size_t(64) << 20;
   return std::min({frames, bound, kMaxReservedBytes / std::max<size_t>(frame_bytes, 1)});

@@ -6,7 +6,7 @@
 #include <memory>
 #include <vector>
 
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 
@@ -84,6 +84,18 @@ class StreamReader {
   // the table code a symbol of frequency at most 4032/4096 (table_code::kVertexFramesPerByte per byte).
   // frames_to_reserve() turns it into memory reserved up front.
   size_t frame_bound() const;
+
+  // The reader between two frames, after read_head(): the coders' states, the adaptive models and the residual
+  // history, enough to read on from that frame later (restore()). About 3 bytes per welded vertex (1 with the table
+  // code) and a few kilobytes.
+  struct Checkpoint;
+  struct CheckpointDeleter {
+    void operator()(Checkpoint* checkpoint) const;
+  };
+  using CheckpointPointer = std::unique_ptr<Checkpoint, CheckpointDeleter>;
+  CheckpointPointer checkpoint() const;
+  void restore(const Checkpoint& checkpoint);
+  static size_t checkpoint_bytes(const Checkpoint& checkpoint);
 
  private:
   const uint8_t* data_;

@@ -256,6 +256,15 @@ void TableResidualDecoder::decode_frame(RangeDecoder& body, int64_t* r) {
   if (next_word_ > word_count_) failure_ = "animation stream: the residual symbols are truncated";
 }
 
+void TableResidualDecoder::restore(const Position& position) {
+  assert(position.history.size() == history_.size());
+  next_word_ = position.next_word;
+  state_ = position.state;
+  history_ = position.history;
+  excess_ = position.excess;
+  failure_ = position.failure;
+}
+
 Status TableResidualDecoder::finish() const {
   if (failure_) return Status(StatusCode::bad_data, failure_);
   if (next_word_ != word_count_ || state_[0] != kStateLow || state_[1] != kStateLow)

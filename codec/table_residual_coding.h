@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "range_coder.h"
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 
@@ -62,6 +62,17 @@ class TableResidualDecoder {
   void decode_frame(RangeDecoder& body, int64_t* row);
 
   bool failed() const { return failure_ != nullptr; }
+
+  // The decoder's state between two frames (the tables, which do not change, left out), to come back to it later.
+  struct Position {
+    size_t next_word = 0;
+    std::array<uint32_t, table_code::kStates> state{};
+    std::vector<uint8_t> history;
+    ExcessModels excess;
+    const char* failure = nullptr;
+  };
+  Position position() const { return {next_word_, state_, history_, excess_, failure_}; }
+  void restore(const Position& position);
   // After the last frame: the words consumed exactly, and both states back at their initial value.
   Status finish() const;
 

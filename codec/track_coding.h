@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "status.h"
+#include "segmorph/status.h"
 #include "track_coding.h"
 
 namespace segmorph {

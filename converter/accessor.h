@@ -7,7 +7,7 @@
 
 #include <tiny_gltf.h>
 
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

@@ -23,7 +23,7 @@
 #include <tiny_gltf.h>
 
 #include "sample.h"
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

@@ -10,7 +10,7 @@
 
 #include "metrics.h"
 #include "sample.h"
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

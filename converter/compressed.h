@@ -12,7 +12,7 @@
 #include "codec.h"
 #include "draco_base_mesh.h"
 #include "sample.h"
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

@@ -12,6 +12,7 @@
 #include "metrics.h"
 #include "moving_meshes.h"
 #include "sample.h"
+#include "segmorph/version.h"
 #include "topology.h"
 #include "tracks.h"
 
@@ -609,7 +610,9 @@ int run(int argc, char** argv) {
       std::fputs(kUsage, stdout);
       return 0;
     } else if (arg == "--version") {
-      std::printf("segmorph 0.1.0\n");
+      std::printf("segmorph %d.%d.%d (animation streams %d to %d, track stream %d)\n", SEGMORPH_VERSION_MAJOR,
+                  SEGMORPH_VERSION_MINOR, SEGMORPH_VERSION_PATCH, SEGMORPH_STREAM_VERSION_MIN,
+                  SEGMORPH_STREAM_VERSION_MAX, SEGMORPH_TRACK_STREAM_VERSION);
       return 0;
     } else if (arg == "-o" || arg == "--output") {
       if (!value(options.output)) return usage_error(arg + " needs a file name");

@@ -8,7 +8,7 @@
 #include <tiny_gltf.h>
 
 #include "draco_base_mesh.h"
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

@@ -9,7 +9,7 @@
 
 #include "animation.h"
 #include "frame_sequence.h"
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

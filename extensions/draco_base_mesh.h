@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "status.h"
+#include "segmorph/status.h"
 
 namespace segmorph {
 

@@ -19,28 +19,7 @@
 namespace segmorph {
 namespace {
 
-// A stretched sphere (642 vertices, x in [−2, 2]) whose right half bends about z by up to `bend` radians,
-// with a travelling ripple: a smooth, non-rigid animation of `frames` frames.
-FrameSequence bending_clip(size_t frames, double bend, double phase) {
-  const FrameSequence shape = testing::stretched_sphere(3, 2.0);
-  FrameSequence clip = shape;
-  clip.frame_count = frames;
-  clip.positions.clear();
-  for (size_t f = 0; f < frames; ++f) {
-    const double t = double(f) / double(frames);
-    for (size_t v = 0; v < shape.vertex_count; ++v) {
-      const double x = shape.positions[v * 3], y = shape.positions[v * 3 + 1], z = shape.positions[v * 3 + 2];
-      const double angle = x > 0 ? bend * t * x / 2 : 0.0;
-      const double ripple = 0.02 * std::sin(3 * x + 6.28 * t + phase);
-      clip.positions.insert(clip.positions.end(),
-                            {float(x * std::cos(angle) - y * std::sin(angle)),
-                             float(x * std::sin(angle) + y * std::cos(angle) + ripple), float(z)});
-    }
-    clip.times.push_back(float(f) / 30);
-  }
-  return clip;
-}
-
+using testing::bending_clip;
 using testing::kg;
 using testing::quantized_base;
 

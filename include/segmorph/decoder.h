@@ -1,0 +1,123 @@
+// segmorph's runtime decoder, C++ API: the SEGMORPH_animation_compression streams of one glTF file turned into
+// frames, for an engine or a viewer that loads the glTF itself (tinygltf, cgltf, fastgltf, ...) and decodes its
+// KHR_draco_mesh_compression base meshes with its own Draco. Needs the C++17 standard library only. The C API
+// (decoder_c.h) is the same decoder for C, WebAssembly and other languages; docs/runtime.md shows both in use.
+//
+// Units and shapes: positions are binary32, in the mesh's own space, V × 3 per frame, vertex-major (x, y, z of
+// vertex 0, then vertex 1, ...); frames follow each other (clip-major, then frame-major). V is the number of the base
+// mesh's vertices as its Draco decoder returned them, in Draco's point order.
+//
+// Every function is safe on untrusted streams: nothing is read outside the bytes given, every count in a stream is
+// checked against the format's limits and the data before memory is sized by it, and a damaged stream is refused
+// with StatusCode::bad_data and a one-line message. There is no global state: a decoder object is used by one
+// thread at a time, and any number of them may run on other threads.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "segmorph/status.h"
+#include "segmorph/version.h"
+
+namespace segmorph {
+
+// Decodes one primitive's animation stream (the bytes of the bufferView its SEGMORPH_animation_compression object
+// names; spec/bitstream.md) against the primitive's base mesh. Reads stream versions SEGMORPH_STREAM_VERSION_MIN to
+// SEGMORPH_STREAM_VERSION_MAX, lossy and lossless, both residual codes.
+//
+// Two ways to decode, which give the same floats:
+// - whole clips, decode_clip(): clip_floats(c) floats each, for a player that keeps every frame (as morph targets,
+//   or in its own animation system);
+// - frame by frame, decode_frame(): the next frame in stream order (clip after clip) into V × 3 floats, for a player
+//   that decodes frame f + 1 while frame f is shown and holds O(V) floats instead of F × V × 3. seek() goes to the
+//   first frame of a clip: to a clip start already passed it costs O(V) (a checkpoint), to a later one it costs
+//   decoding the frames before it.
+//
+// Memory: the decoder holds the stream (a copy), the base mesh (a copy), the stream's motion (12 integers per frame
+// and cluster), per-vertex state (about 100 bytes per vertex) and a checkpoint per clip start passed (about 3 bytes
+// per vertex); never the frames.
+class SEGMORPH_API AnimationDecoder {
+ public:
+  AnimationDecoder();
+  ~AnimationDecoder();
+  AnimationDecoder(AnimationDecoder&&) noexcept;
+  AnimationDecoder& operator=(AnimationDecoder&&) noexcept;
+  AnimationDecoder(const AnimationDecoder&) = delete;
+  AnimationDecoder& operator=(const AnimationDecoder&) = delete;
+
+  // Reads the stream's head (clips, frame counts, clusters, motion, weights) against the base mesh: positions
+  // (vertex_count × 3 floats, exactly as the Draco decoder returned them) and indices (index_count = 3 × the
+  // triangle count, each < vertex_count; Draco's faces). The stream and the mesh are copied: the caller may free
+  // them on return. Replaces whatever the decoder held; after a failure the decoder is closed.
+  // Errors: invalid_argument (null pointers with nonzero counts, index_count not a multiple of 3, an index out of
+  // range), bad_data (not a valid stream, or one for another vertex count), unsupported (a stream version this
+  // decoder does not read).
+  Status open(const void* stream, size_t stream_size, const float* positions, size_t vertex_count,
+              const uint32_t* indices, size_t index_count);
+
+  // Forgets the stream and frees what the decoder holds.
+  void close();
+  bool is_open() const;
+
+  // About the open stream (0 or false when none is open).
+  int stream_version() const;  // 1 or 2
+  bool lossless() const;       // the frames are the encoder's input, bit for bit
+  size_t vertex_count() const;
+  size_t clip_count() const;
+  size_t frame_count(size_t clip) const;  // 0 for a clip that does not exist
+  size_t total_frame_count() const;       // all clips
+  // Floats a clip's frames take: frame_count(clip) × vertex_count() × 3.
+  size_t clip_floats(size_t clip) const;
+
+  // Decodes every frame of `clip` into destination[0 .. clip_floats(clip)); destination_floats must be at least
+  // that. Afterwards the decoder stands at the next clip's first frame. On bad data the destination holds garbage.
+  Status decode_clip(size_t clip, float* destination, size_t destination_floats);
+
+  // For a primitive that keeps its morph targets (spec/README.md, "Kept morph targets": its extension object has
+  // "morphTargets": true and the stream one clip of T frames, T the primitive's target count): the targets' POSITION
+  // displacements, frame_t − base per coordinate in binary32, T × vertex_count() × 3 floats into destination, which
+  // holds destination_floats (at least clip_floats(0)). Fails (bad_data) when the stream has more than one clip.
+  Status decode_targets(float* destination, size_t destination_floats);
+
+  // Frame by frame. The next frame to decode (next_clip() == clip_count() once the last one is decoded).
+  size_t next_clip() const;
+  size_t next_frame() const;  // within next_clip()
+  // Decodes the next frame into destination[0 .. vertex_count() × 3) (destination_floats at least that) and
+  // advances. Decoding the stream's last frame also checks that the stream ends there. invalid_argument past the
+  // last frame (seek first).
+  Status decode_frame(float* destination, size_t destination_floats);
+  // Positions the decoder at the first frame of `clip` (invalid_argument when there is no such clip).
+  Status seek(size_t clip);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+// The track stream of an animation (spec/tracks.md): keyframe samplers of node translations, rotations, scales
+// (and morph weights) quantized and range-coded. The glTF JSON gives its layout (spec/README.md, "Coded tracks"):
+// the key count of each distinct time array, and per coded sampler its time array, path and component count.
+enum class TrackPathCode : uint32_t { translation = 0, rotation = 1, scale = 2, weights = 3 };
+
+struct TrackSamplerLayout {
+  uint32_t times = 0;       // index of its time array
+  uint32_t path = 0;        // a TrackPathCode
+  uint32_t components = 3;  // 3 for translation and scale, 4 for rotation (x, y, z, w), the target count for weights
+};
+
+// Floats the decoded tracks of this layout take: every time array's keys, then every sampler's key count ×
+// components values. 0 when the layout is invalid (an empty time array, a sampler naming a missing time array, a
+// path above 3, a component count that does not fit its path) or claims more than 2^26 values.
+SEGMORPH_API size_t track_stream_floats(const size_t* time_counts, size_t time_array_count,
+                                        const TrackSamplerLayout* samplers, size_t sampler_count);
+
+// Decodes a track stream laid out as given into destination (destination_floats at least track_stream_floats(...)):
+// time array 0's keys (seconds), time array 1's, ..., then sampler 0's values (key by key, component by component),
+// sampler 1's, ... Refuses (bad_data) a layout that claims more values than a stream of stream_size bytes can hold
+// (364 per byte, spec/README.md) before allocating anything, and a stream that disagrees with its layout.
+SEGMORPH_API Status decode_track_stream(const void* stream, size_t stream_size, const size_t* time_counts,
+                                        size_t time_array_count, const TrackSamplerLayout* samplers,
+                                        size_t sampler_count, float* destination, size_t destination_floats);
+
+}  // namespace segmorph
