@@ -150,6 +150,12 @@ Status FrameDecoder::open(const uint8_t* data, size_t size, const std::vector<fl
   }
   version_ = data[4];
   frame_bound_ = reader_->frame_bound();
+  // A caller sizes its frames by the counts: they must be ones the data can back.
+  if (content_.frame_count() > frame_bound_) {
+    reader_.reset();
+    return Status(StatusCode::bad_data, "animation stream claims " + std::to_string(content_.frame_count()) +
+                                            " frames, more than its " + std::to_string(size) + " bytes can hold");
+  }
   loop_ = std::make_unique<FrameLoop>(content_, base, triangles);
   StreamReader* reader = reader_.get();
   residuals_ = [reader](size_t, int64_t* row) { return reader->read_frame(row); };

@@ -76,7 +76,8 @@ class FrameDecoder {
   FrameDecoder& operator=(const FrameDecoder&) = delete;
 
   // Parses the stream's head against the base mesh (base: V × 3 positions; triangles: T × 3 indices into V, checked
-  // by the caller). Keeps a pointer to data, which must outlive the decoder or stay until the next open().
+  // by the caller). Keeps a pointer to data, which must outlive the decoder or stay until the next open(). Refuses a
+  // stream that claims more frames than its bytes can hold (frame_bound()), so that frame counts can size memory.
   Status open(const uint8_t* data, size_t size, const std::vector<float>& base, const std::vector<uint32_t>& triangles);
 
   bool is_open() const { return loop_ != nullptr; }

@@ -9,6 +9,7 @@
 #include "bake.h"
 #include "metrics.h"
 #include "normals.h"
+#include "segmorph/decoder.h"
 #include "topology.h"
 #include "segmorph_extension.h"
 #include "tracks.h"
@@ -375,23 +376,51 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
 }
 
 // Decodes the stream of compressed `primitive` (its extension object parsed into `compressed`) against its base
-// mesh: `out` gets the rest attributes and the decoded clips, each with the primitive's triangles; `bytes` the
-// stream's length.
+// mesh with the runtime decoder (include/segmorph/decoder.h): `out` gets the rest attributes and the decoded clips,
+// each with the primitive's triangles; `bytes` the stream's length. `frames` holds the frame count the file gives each
+// clip (its times accessor, or for kept targets the target count), checked against the stream before anything is
+// sized by them.
 Status decode_primitive_stream(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
-                               const CompressedPrimitive& compressed, const std::string& what, SampledPrimitive& out,
-                               size_t& bytes) {
+                               const CompressedPrimitive& compressed, const std::vector<size_t>& frames,
+                               const std::string& what, SampledPrimitive& out, size_t& bytes) {
   SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, out));
   std::vector<uint32_t> triangles;
   if (primitive.indices < 0) return Status(StatusCode::bad_data, what + ": a compressed primitive needs indices");
   SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", triangles));
+  if (triangles.size() % 3 != 0) return Status(StatusCode::bad_data, what + ": its indices are not triangles");
   for (uint32_t index : triangles)
     if (index >= out.rest_positions.size() / 3)
       return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
   const unsigned char* data = nullptr;
   SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, compressed.buffer_view, what + " " + kExtensionName, &data, &bytes));
-  const Status status = decode_animation(data, bytes, out.rest_positions, triangles, out.clips);
-  if (!status.ok()) return Status(status.code(), what + ": " + status.message());
-  for (FrameSequence& clip : out.clips) clip.triangles = triangles;
+  AnimationDecoder decoder;
+  auto failed = [&](const Status& status) { return Status(status.code(), what + ": " + status.message()); };
+  Status status = decoder.open(data, bytes, out.rest_positions.data(), out.rest_positions.size() / 3,
+                               triangles.data(), triangles.size());
+  if (!status.ok()) return failed(status);
+  if (compressed.morph_targets && (decoder.clip_count() != 1 || decoder.frame_count(0) != frames[0]))
+    return Status(StatusCode::bad_data, what + ": the stream's frames disagree with the morph target count (" +
+                                            std::to_string(decoder.total_frame_count()) + " in " +
+                                            std::to_string(decoder.clip_count()) + " clips, " +
+                                            std::to_string(frames[0]) + " targets)");
+  if (decoder.clip_count() != frames.size())
+    return Status(StatusCode::bad_data, what + ": the stream has " + std::to_string(decoder.clip_count()) +
+                                            " clips, the extension names " + std::to_string(frames.size()));
+  for (size_t c = 0; c < frames.size(); ++c)
+    if (decoder.frame_count(c) != frames[c])
+      return Status(StatusCode::bad_data, what + ": clip " + std::to_string(c) + " has " +
+                                              std::to_string(decoder.frame_count(c)) + " frames in the stream and " +
+                                              std::to_string(frames[c]) + " times");
+  out.clips.assign(frames.size(), FrameSequence());
+  for (size_t c = 0; c < frames.size(); ++c) {
+    FrameSequence& clip = out.clips[c];
+    clip.vertex_count = decoder.vertex_count();
+    clip.frame_count = frames[c];
+    clip.triangles = triangles;
+    clip.positions.resize(decoder.clip_floats(c));
+    status = decoder.decode_clip(c, clip.positions.data(), clip.positions.size());
+    if (!status.ok()) return failed(status);
+  }
   return Status::Ok();
 }
 
@@ -399,13 +428,13 @@ Status decode_primitive_stream(const tinygltf::Model& model, const tinygltf::Pri
 // decoded displacements, NORMAL (where the target has it) derived as bake derives frame normals. `bytes`: the
 // stream's length.
 Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
-                       const std::string& what, size_t& bytes) {
+                       const std::string& what, size_t& bytes, std::vector<FrameSequence>* frames) {
   SampledPrimitive rest;
-  SEGMORPH_RETURN_IF_ERROR(decode_primitive_stream(model, primitive, compressed, what, rest, bytes));
+  if (primitive.targets.empty()) return Status(StatusCode::bad_data, what + ": it keeps morph targets but has none");
+  SEGMORPH_RETURN_IF_ERROR(
+      decode_primitive_stream(model, primitive, compressed, {primitive.targets.size()}, what, rest, bytes));
   const std::vector<FrameSequence>& clips = rest.clips;
   const size_t vertex_count = rest.rest_positions.size() / 3;
-  if (clips.size() != 1 || clips[0].frame_count != primitive.targets.size())
-    return Status(StatusCode::bad_data, what + ": the stream's frames disagree with the morph target count");
   for (const std::map<std::string, int>& target : primitive.targets)
     for (const auto& [semantic, accessor] : target)
       if (semantic != "POSITION" && semantic != "NORMAL")
@@ -414,6 +443,10 @@ Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, c
 
   AccessorWriter writer(model);
   const std::vector<std::vector<float>> deltas = target_displacements(clips[0], rest.rest_positions);
+  if (frames) {  // the displacements as one clip of T frames
+    frames->assign(1, clips[0]);
+    for (size_t t = 0; t < deltas.size(); ++t) std::copy(deltas[t].begin(), deltas[t].end(), (*frames)[0].frame(t));
+  }
   const bool normals = !rest.rest_normals.empty();
   WeldedTopology topology;
   std::vector<double> base_geometric;
@@ -670,7 +703,7 @@ Status decode_draco_primitives(tinygltf::Model& model) {
   return Status::Ok();
 }
 
-Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
+Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std::vector<DecodedFrames>* decoded) {
   SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(model));
   if (!declares_extension(model, kExtensionName)) return Status::Ok();
   DecodedSizes found;
@@ -709,8 +742,11 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
     if (targets) {
       for (size_t p = 0; p < primitives.size(); ++p) {
         size_t bytes = 0;
+        std::vector<FrameSequence> displacements;
         SEGMORPH_RETURN_IF_ERROR(restore_targets(model, model.meshes[m].primitives[p], primitives[p],
-                                                 what + " primitive " + std::to_string(p), bytes));
+                                                 what + " primitive " + std::to_string(p), bytes,
+                                                 decoded ? &displacements : nullptr));
+        if (decoded) decoded->push_back({int(m), int(p), true, std::move(displacements)});
         found.animation_bytes += bytes;
         ++found.primitives;
       }
@@ -753,28 +789,30 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
     for (size_t p = 0; p < mesh.primitives.size(); ++p) {
       tinygltf::Primitive& primitive = mesh.primitives[p];
       const std::string what = "mesh " + std::to_string(animated[i].mesh) + " primitive " + std::to_string(p);
+      // The clips' times first: their counts, which the file's bytes back, are the frame counts the stream must
+      // have before anything is sized by it.
+      std::vector<std::vector<float>> times(streams[i][p].clips.size());
+      std::vector<size_t> frames;
+      for (size_t c = 0; c < times.size(); ++c) {
+        const int accessor = streams[i][p].clips[c].times;
+        if (accessor < 0 || size_t(accessor) >= model.accessors.size() ||
+            model.accessors[size_t(accessor)].componentType != TINYGLTF_COMPONENT_TYPE_FLOAT ||
+            model.accessors[size_t(accessor)].type != TINYGLTF_TYPE_SCALAR)
+          return Status(StatusCode::bad_data, what + ": a clip's times must be a FLOAT SCALAR accessor");
+        SEGMORPH_RETURN_IF_ERROR(read_floats(model, accessor, what + " clip times", times[c]));
+        for (size_t f = 1; f < times[c].size(); ++f)
+          if (!(times[c][f] > times[c][f - 1]))
+            return Status(StatusCode::bad_data, what + ": clip times must increase");
+        frames.push_back(times[c].size());
+      }
       SampledPrimitive out;
       out.primitive = int(p);
       size_t bytes = 0;
-      SEGMORPH_RETURN_IF_ERROR(decode_primitive_stream(model, primitive, streams[i][p], what, out, bytes));
+      SEGMORPH_RETURN_IF_ERROR(decode_primitive_stream(model, primitive, streams[i][p], frames, what, out, bytes));
       found.animation_bytes += bytes;
       ++found.primitives;
-      if (out.clips.size() != streams[i][p].clips.size())
-        return Status(StatusCode::bad_data, what + ": the stream's clip count disagrees with the extension's");
-      for (size_t c = 0; c < out.clips.size(); ++c) {
-        FrameSequence& clip = out.clips[c];
-        const int times = streams[i][p].clips[c].times;
-        if (times < 0 || size_t(times) >= model.accessors.size() ||
-            model.accessors[size_t(times)].componentType != TINYGLTF_COMPONENT_TYPE_FLOAT ||
-            model.accessors[size_t(times)].type != TINYGLTF_TYPE_SCALAR)
-          return Status(StatusCode::bad_data, what + ": a clip's times must be a FLOAT SCALAR accessor");
-        SEGMORPH_RETURN_IF_ERROR(read_floats(model, times, what + " clip times", clip.times));
-        if (clip.times.size() != clip.frame_count)
-          return Status(StatusCode::bad_data, what + ": a clip's times disagree with its frame count");
-        for (size_t f = 1; f < clip.times.size(); ++f)
-          if (!(clip.times[f] > clip.times[f - 1]))
-            return Status(StatusCode::bad_data, what + ": clip times must increase");
-      }
+      for (size_t c = 0; c < out.clips.size(); ++c) out.clips[c].times = std::move(times[c]);
+      if (decoded) decoded->push_back({animated[i].mesh, int(p), false, out.clips});
       node.primitives.push_back(std::move(out));
       primitive.extensions.erase(kExtensionName);
     }
@@ -785,6 +823,10 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes) {
         animation.channels.end());
   SEGMORPH_RETURN_IF_ERROR(bake_model(model, scene, sampled));
   undeclare_extension(model, kExtensionName);
+  if (decoded)
+    std::stable_sort(decoded->begin(), decoded->end(), [](const DecodedFrames& a, const DecodedFrames& b) {
+      return a.mesh != b.mesh ? a.mesh < b.mesh : a.primitive < b.primitive;
+    });
   if (sizes) *sizes = found;
   return Status::Ok();
 }

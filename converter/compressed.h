@@ -49,8 +49,19 @@ struct DecodedSizes {
   size_t coded_animations = 0;  // animations whose tracks were coded
 };
 
+// What a compressed primitive's stream decoded to: for one that plays clips, its clips' frames (positions); for one
+// that keeps its morph targets, one clip whose T frames are the targets' POSITION displacements (frame − base).
+struct DecodedFrames {
+  int mesh = -1, primitive = -1;
+  bool targets = false;
+  std::vector<FrameSequence> clips;
+};
+
 // Replaces KHR_draco_mesh_compression primitives by plain accessors, then decodes SEGMORPH_animation_compression
-// primitives: those that keep morph targets get them back, the others take the form bake writes. A model with neither is left as it is.
-Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes = nullptr);
+// primitives with the runtime decoder (include/segmorph/decoder.h): those that keep morph targets get them back, the
+// others take the form bake writes. A model with neither is left as it is. `decoded`, when given, receives what each
+// compressed primitive's stream decoded to, in the order of meshes and primitives.
+Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes = nullptr,
+                               std::vector<DecodedFrames>* decoded = nullptr);
 
 }  // namespace segmorph

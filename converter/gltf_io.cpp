@@ -425,6 +425,32 @@ void repack(tinygltf::Model& model) {
   if (!packed.data.empty()) model.buffers.push_back(std::move(packed));
 }
 
+Status save_file(const std::string& path, const void* data, size_t size) {
+  std::string temporary = path + ".segmorph-XXXXXX";
+  const int descriptor = mkstemp(&temporary[0]);
+  if (descriptor < 0) return Status(StatusCode::io_error, "cannot write " + path + ": " + std::strerror(errno));
+  // mkstemp makes the file private; the output gets the permissions any new file would.
+  const mode_t mask = umask(0);
+  umask(mask);
+  fchmod(descriptor, 0666 & ~mask);
+  const char* bytes = static_cast<const char*>(data);
+  size_t done = 0;
+  while (done < size) {
+    const ssize_t written = write(descriptor, bytes + done, size - done);
+    if (written < 0 && errno == EINTR) continue;
+    if (written <= 0) break;
+    done += size_t(written);
+  }
+  const bool ok = done == size && fsync(descriptor) == 0;
+  const std::string reason = std::strerror(errno);
+  if (close(descriptor) != 0 || !ok || std::rename(temporary.c_str(), path.c_str()) != 0) {
+    const std::string why = ok ? std::strerror(errno) : reason;
+    std::remove(temporary.c_str());
+    return Status(StatusCode::io_error, "cannot write " + path + ": " + why);
+  }
+  return Status::Ok();
+}
+
 size_t glb_size(tinygltf::Model model) {
   repack(model);
   shorten_float_numbers(model);

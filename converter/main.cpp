@@ -39,9 +39,14 @@ const char* const kUsage =
     "      (see --targets); a skinned mesh keeps its skin (see --skins). Meshes that animated nodes move\n"
     "      are compressed with Draco, and translation, rotation and scale tracks are coded (the extension\n"
     "      is then required). Default target: --error 0.15 (KG error in %).\n"
-    "  decode IN -o OUT\n"
+    "  decode IN -o OUT [--frames FRAMES]\n"
     "      Restore standard glTF from an encoded file: morph targets in the form bake writes, a mesh's kept\n"
     "      morph targets played by its own weights animation, kept skins, plain meshes and float tracks.\n"
+    "      With --frames, also (or, without -o, only) write what every compressed primitive's stream\n"
+    "      decodes to as raw little-endian float32, the layout examples/engine_decode writes: primitive by\n"
+    "      primitive (meshes in order, then their primitives), clip by clip, frame by frame, vertex by\n"
+    "      vertex, x y z; the frames are positions, except for kept morph targets: one clip of their\n"
+    "      POSITION displacements (docs/runtime.md).\n"
     "  verify ORIGINAL COMPRESSED [--json]\n"
     "      Compare the animation of two files (either may be encoded, baked, original or written by another\n"
     "      tool: primitives and vertices are paired by trajectory, COMPRESSED is sampled at ORIGINAL's frame\n"
@@ -50,6 +55,7 @@ const char* const kUsage =
     "\n"
     "Options:\n"
     "  -o, --output FILE  output file (.glb: binary; .gltf: JSON with FILE's name .bin beside it)\n"
+    "  --frames FILE      decode: also write the decoded frames as raw float32 (see decode)\n"
     "  --fps N            sample every clip on a regular grid of N frames per second; by default the\n"
     "                     union of the clip's key times, or 30 fps where keys are denser than 60 per second\n"
     "  --error E          encode: KG error target in percent (default 0.15)\n"
@@ -85,6 +91,7 @@ struct Options {
   std::string command;
   std::vector<std::string> inputs;
   std::string output;
+  std::string frames;  // decode --frames: the decoded frames as raw floats
   SampleSettings sampling;
   CodecSettings codec;
   DracoSettings draco;  // position_bits 0: compress_model chooses them
@@ -538,6 +545,24 @@ int run_encode(const Options& options) {
   return 0;
 }
 
+// The frames of every compressed primitive as decode --frames writes them: little-endian float32, primitive after
+// primitive, clip after clip, frame after frame.
+Status save_frames(const std::vector<DecodedFrames>& decoded, const std::string& path) {
+  static_assert(sizeof(float) == 4, "binary32 floats");
+  const uint16_t probe = 1;
+  uint8_t first;
+  std::memcpy(&first, &probe, 1);
+  if (first != 1) return Status(StatusCode::unsupported, "--frames writes little-endian floats: this is a big-endian machine");
+  size_t floats = 0;
+  for (const DecodedFrames& primitive : decoded)
+    for (const FrameSequence& clip : primitive.clips) floats += clip.positions.size();
+  std::vector<float> all;
+  all.reserve(floats);
+  for (const DecodedFrames& primitive : decoded)
+    for (const FrameSequence& clip : primitive.clips) all.insert(all.end(), clip.positions.begin(), clip.positions.end());
+  return save_file(path, all.data(), all.size() * sizeof(float));
+}
+
 int run_decode(const Options& options) {
   const std::string& path = options.inputs[0];
   tinygltf::Model model;
@@ -545,14 +570,22 @@ int run_decode(const Options& options) {
   progress(options, "reading " + path);
   Status status = load_gltf(path, model, &warnings);
   DecodedSizes sizes;
-  if (status.ok()) status = decode_compressed_model(model, &sizes);
+  std::vector<DecodedFrames> decoded;
+  if (status.ok()) status = decode_compressed_model(model, &sizes, options.frames.empty() ? nullptr : &decoded);
   if (!status.ok()) return fail(path, status);
   if (sizes.primitives == 0 && sizes.coded_animations == 0)
     return fail(path, Status(StatusCode::nothing_to_do,
                              "not encoded: it has no SEGMORPH_animation_compression primitive or animation"));
-  progress(options, "writing " + options.output);
-  status = save_gltf(model, options.output);
-  if (!status.ok()) return fail(options.output, status);
+  if (!options.output.empty()) {
+    progress(options, "writing " + options.output);
+    status = save_gltf(model, options.output);
+    if (!status.ok()) return fail(options.output, status);
+  }
+  if (!options.frames.empty()) {
+    progress(options, "writing the decoded frames to " + options.frames);
+    status = save_frames(decoded, options.frames);
+    if (!status.ok()) return fail(options.frames, status);
+  }
   progress(options, "decoded " + std::to_string(sizes.primitives) + " primitive" + (sizes.primitives == 1 ? "" : "s") +
                         " and the tracks of " + std::to_string(sizes.coded_animations) + " animation" +
                         (sizes.coded_animations == 1 ? "" : "s"));
@@ -616,6 +649,8 @@ int run(int argc, char** argv) {
       return 0;
     } else if (arg == "-o" || arg == "--output") {
       if (!value(options.output)) return usage_error(arg + " needs a file name");
+    } else if (arg == "--frames") {
+      if (!value(options.frames)) return usage_error(arg + " needs a file name");
     } else if (arg == "--fps") {
       std::string text;
       if (!value(text)) return usage_error("--fps needs a number");
@@ -710,10 +745,12 @@ int run(int argc, char** argv) {
     if (!has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
     return run_bake(options);
   }
+  if (!options.frames.empty() && options.command != "decode") return usage_error("--frames is for decode");
   if (options.command == "encode" || options.command == "decode") {
     if (options.inputs.size() != 1) return usage_error(options.command + " takes one input file");
-    if (options.output.empty()) return usage_error(options.command + " needs -o OUT");
-    if (!has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
+    const bool frames_only = options.command == "decode" && !options.frames.empty() && options.output.empty();
+    if (options.output.empty() && !frames_only) return usage_error(options.command + " needs -o OUT");
+    if (!frames_only && !has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
     if (options.targets == Options::Targets::keep && options.codec.mode == RateMode::lossless)
       return usage_error("--targets keep is lossy: it cannot be combined with --lossless");
     if (options.codec.table_residuals && options.codec.mode == RateMode::lossless)

@@ -6,6 +6,7 @@
 
 #include "accessor.h"
 #include "animation.h"
+#include "segmorph/decoder.h"
 #include "segmorph_extension.h"
 #include "track_coding.h"
 
@@ -307,19 +308,31 @@ Status decode_tracks_in_model(tinygltf::Model& model, size_t* bytes, size_t* ani
     TrackLayout layout;
     std::vector<int> inputs;
     SEGMORPH_RETURN_IF_ERROR(coded_layout(model, animation, coded, size, what, layout, inputs));
-    TrackSet set;
-    status = decode_tracks(data, size, layout, set);
+    // Through the runtime decoder (include/segmorph/decoder.h): the times of each array, then each sampler's values.
+    std::vector<TrackSamplerLayout> samplers;
+    for (const TrackLayout::Sampler& sampler : layout.samplers)
+      samplers.push_back({uint32_t(sampler.times), uint32_t(sampler.path), uint32_t(sampler.components)});
+    const size_t floats =
+        track_stream_floats(layout.time_counts.data(), layout.time_counts.size(), samplers.data(), samplers.size());
+    std::vector<float> decoded(floats);
+    status = decode_track_stream(data, size, layout.time_counts.data(), layout.time_counts.size(), samplers.data(),
+                                 samplers.size(), decoded.data(), decoded.size());
     if (!status.ok()) return Status(status.code(), what + ": " + status.message());
     AccessorWriter writer(model);
-    std::vector<int> written(set.times.size());
-    for (size_t t = 0; t < set.times.size(); ++t)
-      written[t] = writer.add_floats(set.times[t].data(), set.times[t].size(), TINYGLTF_TYPE_SCALAR, true, 0);
+    const float* next = decoded.data();
+    std::vector<int> written(layout.time_counts.size());
+    for (size_t t = 0; t < written.size(); ++t) {
+      written[t] = writer.add_floats(next, layout.time_counts[t], TINYGLTF_TYPE_SCALAR, true, 0);
+      next += layout.time_counts[t];
+    }
     for (size_t i = 0; i < coded.samplers.size(); ++i) {
-      const TrackSampler& track = set.samplers[i];
+      const TrackLayout::Sampler& track = layout.samplers[i];
+      const size_t keys = layout.time_counts[size_t(track.times)];
       tinygltf::AnimationSampler& sampler = animation.samplers[size_t(coded.samplers[i])];
       sampler.input = written[size_t(track.times)];
-      sampler.output = writer.add_floats(track.values.data(), track.values.size() / size_t(track.components),
-                                         track.components == 4 ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, false, 0);
+      sampler.output = writer.add_floats(next, keys, track.components == 4 ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3,
+                                         false, 0);
+      next += keys * size_t(track.components);
     }
     animation.extensions.erase(it);
     total += size;

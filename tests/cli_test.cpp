@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "accessor.h"
 #include "gltf_io.h"
 #include "test_files.h"
 
@@ -496,6 +497,61 @@ TEST(Cli, KeptMorphTargetsEncodeDecodeAndVerify) {
   EXPECT_LT(json_number(lossless.out, "kg_percent"), 1e-5);
   EXPECT_EQ(run("encode -q " + input + " -o " + directory + "/x.glb --targets keep --lossless").exit_code, 2);
   EXPECT_EQ(run("encode -q " + input + " -o " + directory + "/x.glb --targets some").exit_code, 2);
+}
+
+// decode --frames writes what the streams decode to, as raw floats: for a primitive that plays clips, its frames, whose
+// first is the decoded file's base and each other the base plus its target (within an ulp of the larger of the two,
+// spec/README.md); for kept
+// targets, their displacements, which are the decoded file's target accessors exactly.
+TEST(Cli, DecodeFramesWritesWhatTheStreamsDecodeTo) {
+  const std::string directory = output_directory("decode_frames");
+  const std::string input = sample("AnimatedMorphCube/AnimatedMorphCube.glb");
+  for (const char* targets : {"bake", "keep"}) {
+    SCOPED_TRACE(targets);
+    const std::string encoded = directory + "/cube.glb", decoded = directory + "/decoded.glb";
+    const std::string frames = directory + "/frames.bin", only = directory + "/only.bin";
+    ASSERT_EQ(run("encode -q " + input + " -o " + encoded + " --targets " + targets).exit_code, 0);
+    Result result = run("decode -q " + encoded + " -o " + decoded + " --frames " + frames);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    result = run("decode -q " + encoded + " --frames " + only);  // without -o: the frames alone
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    const std::string bytes = read_text(frames);
+    EXPECT_EQ(bytes, read_text(only));
+    std::vector<float> values(bytes.size() / 4);
+    std::memcpy(values.data(), bytes.data(), values.size() * 4);
+
+    tinygltf::Model model;
+    ASSERT_TRUE(segmorph::load_gltf(decoded, model).ok());
+    ASSERT_EQ(model.meshes.size(), 1u);
+    const tinygltf::Primitive& primitive = model.meshes[0].primitives[0];
+    std::vector<float> base;
+    ASSERT_TRUE(segmorph::read_floats(model, primitive.attributes.at("POSITION"), "base", base).ok());
+    const bool kept = std::string(targets) == "keep";
+    // The cube's 2 kept targets, or its 127 frames (the base, then one target each).
+    const size_t frame_count = kept ? 2 : 127;
+    ASSERT_EQ(primitive.targets.size(), kept ? 2u : 126u);
+    ASSERT_EQ(values.size(), frame_count * base.size());
+    if (!kept) {
+      EXPECT_EQ(std::memcmp(values.data(), base.data(), base.size() * 4), 0) << "frame 0 is the base";
+    }
+    for (size_t t = 0; t < primitive.targets.size(); ++t) {
+      std::vector<float> delta;
+      ASSERT_TRUE(segmorph::read_floats(model, primitive.targets[t].at("POSITION"), "target", delta).ok());
+      const float* frame = &values[(kept ? t : t + 1) * base.size()];
+      for (size_t i = 0; i < base.size(); ++i) {
+        if (kept) {
+          ASSERT_EQ(std::memcmp(&frame[i], &delta[i], 4), 0) << "target " << t << " float " << i;
+        } else {
+          const float played = base[i] + delta[i], larger = std::max(std::fabs(base[i]), std::fabs(frame[i]));
+          ASSERT_LE(std::fabs(played - frame[i]), std::nextafter(larger, INFINITY) - larger)
+              << "frame " << t + 1 << " float " << i;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(run("encode -q " + input + " -o " + directory + "/x.glb --frames " + directory + "/x.bin").exit_code, 2);
+  EXPECT_EQ(run("decode -q " + input + " --frames " + directory + "/x.bin").exit_code, 1);  // not encoded
+  EXPECT_FALSE(fs::exists(directory + "/x.bin"));
 }
 
 // A kept-targets file whose stream does not match its targets is refused, with nothing written.

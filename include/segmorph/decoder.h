@@ -49,7 +49,9 @@ class SEGMORPH_API AnimationDecoder {
   // Reads the stream's head (clips, frame counts, clusters, motion, weights) against the base mesh: positions
   // (vertex_count × 3 floats, exactly as the Draco decoder returned them) and indices (index_count = 3 × the
   // triangle count, each < vertex_count; Draco's faces). The stream and the mesh are copied: the caller may free
-  // them on return. Replaces whatever the decoder held; after a failure the decoder is closed.
+  // them on return. Replaces whatever the decoder held; after a failure the decoder is closed. A stream that claims
+  // more frames than its bytes can hold is refused here (each frame of each distinct base position costs at least
+  // 1/376 byte), so the frame counts, and clip_floats(), are safe to allocate by.
   // Errors: invalid_argument (null pointers with nonzero counts, index_count not a multiple of 3, an index out of
   // range), bad_data (not a valid stream, or one for another vertex count), unsupported (a stream version this
   // decoder does not read).

@@ -66,7 +66,9 @@ SEGMORPH_API const char* segmorph_decoder_message(const segmorph_decoder* decode
  * names) against the primitive's base mesh: positions (vertex_count x 3 floats, exactly as the Draco decoder
  * returned them) and indices (index_count = 3 x the triangle count, each < vertex_count; Draco's faces). Reads stream
  * versions SEGMORPH_STREAM_VERSION_MIN to SEGMORPH_STREAM_VERSION_MAX. The stream and the mesh are copied: the caller
- * may free them on return. Replaces what the decoder held; after a failure the decoder is closed.
+ * may free them on return. Replaces what the decoder held; after a failure the decoder is closed. A stream that claims
+ * more frames than its bytes can hold is refused here (each frame of each distinct base position costs at least 1/376
+ * byte), so the frame counts and segmorph_decode_clip_bound() are safe to allocate by.
  * Returns INVALID_ARGUMENT (null pointers with nonzero counts, index_count not a multiple of 3, an index out of
  * range), BAD_DATA, UNSUPPORTED (a newer stream version) or OUT_OF_MEMORY. */
 SEGMORPH_API segmorph_status segmorph_decoder_open(segmorph_decoder* decoder, const void* stream, size_t stream_size,
