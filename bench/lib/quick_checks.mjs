@@ -40,7 +40,7 @@ export function checkQuick(parts, doc, chartDir) {
   }
   for (const { label, stages } of parts.speed?.codec ?? []) {
     expect(!stages.failed, `${label}: ${stages.failed}`);
-    for (const name of ['EncodeWhole', 'DecodeWhole', 'DecodeFrameCopyLimit'])
+    for (const name of ['EncodeWhole', 'DecodeWhole', 'DecodeApiClips', 'DecodeApiFrames', 'DecodeFrameCopyLimit'])
       expect(stages[name] && stages[name].vfps > 0, `${label}: codec_benchmark has no ${name} throughput`);
   }
   const scaling = parts.scaling?.result;

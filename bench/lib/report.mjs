@@ -221,6 +221,26 @@ function speedAndMemory(speed, shapes, charts, lines, flags) {
         'EncodeMeasureSubbands/3 one rate-control measurement of the residuals at 3 candidate steps per axis (the rate ' +
         'control makes several); DecodeEntropy the range decoder alone and DecodeFrames everything after it.');
   print();
+
+  const api = speed.codec.filter(({ stages }) => !stages.failed && stages.DecodeWhole && stages.DecodeApiClips && stages.DecodeApiFrames);
+  if (api.length === 0) return;
+  print('### The runtime decoder through its C API');
+  print();
+  print('The same streams and runs through `include/segmorph/decoder_c.h`, as an engine calls it (docs/runtime.md): the ' +
+        'stream opened, then every clip into memory the caller allocated beforehand (`DecodeApiClips`), or every frame ' +
+        'into one V × 3 buffer, as a player that streams frames does (`DecodeApiFrames`); next to the decoder inside ' +
+        'the tool (`DecodeWhole`, which grows the frames as it decodes) and a copy of the frames. CPU time per ' +
+        'decode of the whole stream and vertex-frames per second; the API\'s cost is its time over DecodeWhole\'s.');
+  print();
+  print('| sequence | V × F | DecodeWhole | DecodeApiClips | DecodeApiFrames | copy of the frames | API cost: clips, frames |');
+  print('|---|---|---|---|---|---|---|');
+  const cell = (stage) => `${ms(stage.ms)} ms, ${(stage.vfps / 1e6).toFixed(1)} M vf/s`;
+  const cost = (stage, base) => `${stage.ms >= base.ms ? '+' : ''}${((stage.ms / base.ms - 1) * 100).toFixed(1)} %`;
+  for (const { label, stages } of api)
+    print(`| ${label} | ${shapeText(shapes.get(label))} | ${cell(stages.DecodeWhole)} | ${cell(stages.DecodeApiClips)} | ` +
+          `${cell(stages.DecodeApiFrames)} | ${stages.DecodeFrameCopyLimit ? cell(stages.DecodeFrameCopyLimit) : '—'} | ` +
+          `${cost(stages.DecodeApiClips, stages.DecodeWhole)}, ${cost(stages.DecodeApiFrames, stages.DecodeWhole)} |`);
+  print();
 }
 
 // Log-log slope of `y` against `x` between two points: the exponent of the growth.
@@ -336,6 +356,10 @@ function summary(parts, lines) {
     const decode = parts.speed.codec.filter((c) => !c.stages.failed && c.stages.DecodeWhole && c.stages.DecodeFrameCopyLimit)
       .map((c) => `${path.basename(c.label)} ${(c.stages.DecodeWhole.vfps / 1e6).toFixed(0)} M vf/s (copy ${(c.stages.DecodeFrameCopyLimit.vfps / 1e6).toFixed(0)} M)`);
     if (decode.length) print(`- Codec decode throughput, vertex-frames per second: ${decode.join(', ')}.`);
+    const api = parts.speed.codec.filter((c) => !c.stages.failed && c.stages.DecodeWhole && c.stages.DecodeApiClips && c.stages.DecodeApiFrames)
+      .map((c) => `${path.basename(c.label)} ${((c.stages.DecodeApiClips.ms / c.stages.DecodeWhole.ms - 1) * 100).toFixed(1)} % / ` +
+                  `${((c.stages.DecodeApiFrames.ms / c.stages.DecodeWhole.ms - 1) * 100).toFixed(1)} %`);
+    if (api.length) print(`- The runtime decoder's C API (whole clips / frame by frame) over the tool's decoder: ${api.join(', ')}.`);
   }
   const scaling = parts.scaling?.result;
   if (scaling && !scaling.failed && scaling.byVertices.length > 1) {

@@ -58,7 +58,7 @@ export function benchmarkCodec(tools, input, dir, quick) {
   mkdirSync(dir, { recursive: true });
   const json = path.join(dir, 'codec_benchmark.json');
   const args = [input, '--error', String(SPEED_ERROR), `--benchmark_out=${json}`, '--benchmark_out_format=json'];
-  if (quick) args.push('--benchmark_min_time=0.001', '--benchmark_filter=EncodeWhole|DecodeWhole|DecodeFrameCopyLimit');
+  if (quick) args.push('--benchmark_min_time=0.001', '--benchmark_filter=EncodeWhole|DecodeWhole|DecodeApiClips|DecodeApiFrames|DecodeFrameCopyLimit');
   const result = tools.run(path.join(dir, 'codec_benchmark.log'), 'codec_benchmark', args);
   if (!result.ok) return { failed: `codec_benchmark failed (${path.join(dir, 'codec_benchmark.log')})` };
   const stages = {};
