@@ -8,6 +8,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "codec.h"
@@ -274,6 +275,30 @@ TEST(DecoderApi, DamagedStreamsAreBadDataAndTheDecoderIsReusable) {
     EXPECT_TRUE(same_bits(frames.data(), expected.back().positions.data(), frames.size())) << c.name;
   }
   segmorph_decoder_destroy(decoder);
+}
+
+// No global state: decoders on several threads at once, each its own stream, give each stream's frames.
+TEST(DecoderApi, DecodersOnSeveralThreadsGiveTheReferenceFrames) {
+  const std::vector<Case> all = cases();
+  std::vector<std::vector<FrameSequence>> expected;
+  for (const Case& c : all) expected.push_back(reference(c));
+  std::vector<int> same(all.size() * 2, 0);
+  std::vector<std::thread> threads;
+  for (size_t t = 0; t < same.size(); ++t)
+    threads.emplace_back([&, t] {
+      const Case& c = all[t % all.size()];
+      segmorph_decoder* decoder = segmorph_decoder_create();
+      bool ok = open(decoder, c) == SEGMORPH_STATUS_OK;
+      for (size_t clip = 0; ok && clip < expected[t % all.size()].size(); ++clip) {
+        std::vector<float> frames(segmorph_decode_clip_bound(decoder, clip));
+        ok = segmorph_decode_clip(decoder, clip, frames.data(), frames.size()) == SEGMORPH_STATUS_OK &&
+             same_bits(frames.data(), expected[t % all.size()][clip].positions.data(), frames.size());
+      }
+      segmorph_decoder_destroy(decoder);
+      same[t] = ok ? 1 : 0;
+    });
+  for (std::thread& thread : threads) thread.join();
+  for (size_t t = 0; t < same.size(); ++t) EXPECT_EQ(same[t], 1) << "thread " << t << ": " << all[t % all.size()].name;
 }
 
 // A base mesh with another vertex count than the stream's is the wrong mesh.

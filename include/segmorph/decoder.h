@@ -35,7 +35,7 @@ namespace segmorph {
 //   decoding the frames before it.
 //
 // Memory: the decoder holds the stream (a copy), the base mesh (a copy), the stream's motion (12 integers per frame
-// and cluster), per-vertex state (about 100 bytes per vertex) and a checkpoint per clip start passed (about 3 bytes
+// and cluster), per-vertex state (about 500 bytes per vertex) and a checkpoint per clip start passed (about 3 bytes
 // per vertex); never the frames.
 class SEGMORPH_API AnimationDecoder {
  public:

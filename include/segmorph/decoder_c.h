@@ -10,7 +10,7 @@
  * checked against the format's limits and the data before memory is sized by it, and a damaged stream gives
  * SEGMORPH_STATUS_BAD_DATA with a one-line message. There is no global state: a decoder is used by one thread at a
  * time, and any number of decoders may run on other threads. The decoder allocates its working memory with the C++
- * library's operator new (at most a few hundred bytes per vertex, never the frames, which go where the caller says).
+ * library's operator new (about 500 bytes per vertex, never the frames, which go where the caller says).
  *
  * The calls, for one primitive (error handling left out):
  *   segmorph_decoder* decoder = segmorph_decoder_create();
