@@ -1,0 +1,122 @@
+// The WebAssembly decoder (web/segmorph_decoder.js, built at BUILD/web) against the native one: every file given is
+// decoded in Node.js as a web page would (the GLB parsed here, its Draco base meshes decoded with Draco's own
+// JavaScript decoder, draco3dgltf, each compressed primitive's stream with SegmorphDecoder) and the frames must equal
+// `segmorph decode FILE --frames` bit for bit (the same layout: primitives in mesh order, clips, frames; kept targets
+// as displacements). Coded track streams are compared with the decoded file's float tracks, bit for bit (but for
+// samplers only placeholder channels play, which decode drops).
+//
+//   node tests/js/web_wasm_native.mjs SEGMORPH WEB_DIR WORK_DIR FILE...
+// Exit status 1 on any difference or failure, with one line saying where.
+import { execFileSync } from 'node:child_process';
+import { mkdirSync, readFileSync } from 'node:fs';
+import path from 'node:path';
+import { pathToFileURL } from 'node:url';
+import { createRequire } from 'node:module';
+
+import { readAsset } from './glb.mjs';
+
+const require = createRequire(import.meta.url);
+const [segmorph, webDir, work, ...files] = process.argv.slice(2);
+if (!segmorph || !webDir || !work || files.length === 0) {
+  console.error('usage: node tests/js/web_wasm_native.mjs SEGMORPH WEB_DIR WORK_DIR FILE...');
+  process.exit(2);
+}
+mkdirSync(work, { recursive: true });
+const { SegmorphDecoder } = await import(pathToFileURL(path.join(webDir, 'segmorph_decoder.js')).href);
+await SegmorphDecoder.ready;
+const draco = await require('draco3dgltf').createDecoderModule({});
+const NAME = 'SEGMORPH_animation_compression';
+
+function viewBytes(asset, index) {
+  const view = asset.json.bufferViews[index];
+  return asset.buffers[view.buffer].subarray(view.byteOffset ?? 0, (view.byteOffset ?? 0) + view.byteLength);
+}
+
+// The base mesh as a page's Draco decoder gives it: POSITION in point order, the faces.
+function dracoBase(asset, extension) {
+  const bytes = viewBytes(asset, extension.bufferView);
+  const decoder = new draco.Decoder(), buffer = new draco.DecoderBuffer();
+  buffer.Init(new Int8Array(bytes.buffer, bytes.byteOffset, bytes.byteLength), bytes.byteLength);
+  const mesh = new draco.Mesh();
+  const status = decoder.DecodeBufferToMesh(buffer, mesh);
+  if (!status.ok()) throw new Error(`Draco: ${status.error_msg()}`);
+  const attribute = decoder.GetAttributeByUniqueId(mesh, extension.attributes.POSITION);
+  const points = mesh.num_points(), floats = points * 3, faces = mesh.num_faces();
+  let pointer = draco._malloc(floats * 4);
+  decoder.GetAttributeDataArrayForAllPoints(mesh, attribute, draco.DT_FLOAT32, floats * 4, pointer);
+  const positions = new Float32Array(draco.HEAPF32.buffer, pointer, floats).slice();
+  draco._free(pointer);
+  pointer = draco._malloc(faces * 12);
+  decoder.GetTrianglesUInt32Array(mesh, faces * 12, pointer);
+  const indices = new Uint32Array(draco.HEAPU32.buffer, pointer, faces * 3).slice();
+  draco._free(pointer);
+  for (const object of [mesh, buffer, decoder]) draco.destroy(object);
+  return { positions, indices };
+}
+
+let failures = 0, compared = 0, floats = 0;
+for (const file of files) {
+  const name = path.basename(file);
+  try {
+    const asset = await readAsset(file);
+    const parts = [];
+    for (const [m, mesh] of (asset.json.meshes ?? []).entries())
+      for (const [p, primitive] of mesh.primitives.entries()) {
+        const extension = primitive.extensions?.[NAME];
+        if (!extension) continue;
+        const { positions, indices } = dracoBase(asset, primitive.extensions.KHR_draco_mesh_compression);
+        const stream = viewBytes(asset, extension.bufferView);
+        if (extension.morphTargets) {
+          parts.push(SegmorphDecoder.decodeTargets(stream, positions, indices).deltas);
+        } else {
+          for (const clip of SegmorphDecoder.decodeStream(stream, positions, indices).clips) parts.push(clip.frames);
+        }
+      }
+    const reference = path.join(work, `${name}.frames.bin`), decodedFile = path.join(work, `${name}.decoded.glb`);
+    execFileSync(segmorph, ['decode', '-q', file, '-o', decodedFile, '--frames', reference]);
+    const expected = readFileSync(reference);
+    const actual = Buffer.concat(parts.map((a) => Buffer.from(a.buffer, a.byteOffset, a.byteLength)));
+    if (!actual.equals(expected)) {
+      console.error(`web_wasm_native: ${file}: the WebAssembly frames (${actual.length} bytes) differ from segmorph decode --frames (${expected.length} bytes)`);
+      failures += 1;
+      continue;
+    }
+    floats += actual.length / 4;
+    // Coded tracks: the decoded file holds them as floats; the WebAssembly decoder must give the same bits.
+    const decoded = await readAsset(decodedFile);
+    for (const [a, animation] of (asset.json.animations ?? []).entries()) {
+      const coded = animation.extensions?.[NAME];
+      if (!coded) continue;
+      const inputs = [], samplers = [];
+      for (const s of coded.samplers) {
+        const sampler = animation.samplers[s];
+        const paths = animation.channels.filter((c) => c.sampler === s).map((c) => c.target.path);
+        const pathCode = { translation: 0, rotation: 1, scale: 2 }[paths[0]];
+        let times = inputs.indexOf(sampler.input);
+        if (times < 0) times = inputs.push(sampler.input) - 1;
+        samplers.push({ times, path: pathCode, components: pathCode === 1 ? 4 : 3 });
+      }
+      const tracks = SegmorphDecoder.decodeTracks(viewBytes(asset, coded.bufferView),
+                                                  inputs.map((i) => asset.json.accessors[i].count), samplers);
+      coded.samplers.forEach((s, i) => {
+        // A sampler that only placeholder channels play is dropped by decode (its animation is rebuilt).
+        if (animation.channels.every((c) => c.sampler !== s || c.extensions?.[NAME]?.placeholder)) return;
+        const out = decoded.json.animations[a].samplers[s].output, accessor = decoded.json.accessors[out];
+        const view = decoded.json.bufferViews[accessor.bufferView];
+        const start = (view.byteOffset ?? 0) + (accessor.byteOffset ?? 0);
+        const bytes = decoded.buffers[view.buffer].subarray(start, start + tracks.values[i].byteLength);
+        if (!Buffer.from(tracks.values[i].buffer, tracks.values[i].byteOffset, tracks.values[i].byteLength).equals(bytes)) {
+          console.error(`web_wasm_native: ${file}: animation ${a} sampler ${s}: the WebAssembly track values differ from segmorph decode's`);
+          failures += 1;
+        }
+        floats += tracks.values[i].length;
+      });
+    }
+    compared += 1;
+  } catch (error) {
+    console.error(`web_wasm_native: ${file}: ${error.message}`);
+    failures += 1;
+  }
+}
+console.log(`web_wasm_native: ${compared} of ${files.length} files, ${floats} floats: ${failures === 0 ? 'the WebAssembly decoder gives the native floats bit for bit' : `${failures} failed`}`);
+process.exit(failures === 0 ? 0 : 1);
