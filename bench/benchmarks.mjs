@@ -3,7 +3,7 @@
 // animated sample (rate and distortion), speed and memory per file, and how the codec scales; then
 // docs/benchmarks.md with its charts (docs/bench/*.svg).
 //
-//   node bench/benchmarks.mjs [--parts rd,speed,scaling] [--build DIR] [--samples DIR] [--out DIR] [--doc FILE]
+//   node bench/benchmarks.mjs [--parts rd,speed,scaling,browser] [--build DIR] [--samples DIR] [--out DIR] [--doc FILE]
 //   node bench/benchmarks.mjs --quick [--input FILE] [--build DIR] [--out DIR]
 //
 // --build    the Release build folder (default build/)
@@ -27,13 +27,14 @@ import { SWEEPS, sweepFile } from './lib/rate_distortion.mjs';
 import { writeReport } from './lib/report.mjs';
 import { SCALING, measureScaling } from './lib/scaling.mjs';
 import { benchmarkCodec, measureFile } from './lib/speed.mjs';
+import { measureBrowser } from './lib/browser.mjs';
 import { StepError, Tools, gltfFiles, machine, progress, revision } from './lib/tools.mjs';
 import { checkQuick } from './lib/quick_checks.mjs';
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
-const USAGE = 'usage: node bench/benchmarks.mjs [--quick [--input FILE]] [--parts rd,speed,scaling] [--build DIR] ' +
+const USAGE = 'usage: node bench/benchmarks.mjs [--quick [--input FILE]] [--parts rd,speed,scaling,browser] [--build DIR] ' +
               '[--samples DIR] [--out DIR] [--doc FILE]';
-const PARTS = ['rd', 'speed', 'scaling'];
+const PARTS = ['rd', 'speed', 'scaling', 'browser'];
 
 function parseArguments(argv) {
   const options = { quick: false, parts: PARTS, build: path.join(root, 'build'),
@@ -91,17 +92,17 @@ function meta(tools, started, load) {
   };
 }
 
-function runPart(name, options, tools, body) {
+async function runPart(name, options, tools, body) {
   const started = new Date(), load = os.loadavg()[0];
   progress(`${name}: started`);
-  const result = body();
+  const result = await body();
   const saved = { meta: meta(tools, started, load), ...result };
   mkdirSync(path.join(options.out, 'results'), { recursive: true });
   writeFileSync(path.join(options.out, 'results', `${name}.json`), JSON.stringify(saved, null, 1));
   progress(`${name}: done in ${saved.meta.minutes.toFixed(1)} min`);
 }
 
-function main() {
+async function main() {
   const options = parseArguments(process.argv.slice(2));
   const tools = new Tools(root, options.build);
   tools.require('segmorph', 'run_measured', 'gltfpack', 'gltf_transform', 'meshopt_decode', 'three');
@@ -114,7 +115,7 @@ function main() {
   const folder = (part, index, label) => path.join(options.out, part, `${index + 1}-${path.basename(label).replace(/\.(glb|gltf)$/i, '')}`);
 
   if (options.parts.includes('rd'))
-    runPart('rd', options, tools, () => ({
+    await runPart('rd', options, tools, () => ({
       files: files.map(({ label, file }, i) => {
         progress(`rate-distortion ${i + 1}/${files.length}: ${label}`);
         return { label, ...sweepFile(tools, file, folder('rd', i, label), SWEEPS[mode]) };
@@ -122,7 +123,7 @@ function main() {
     }));
   if (options.parts.includes('speed')) {
     const repeats = options.quick ? 1 : 3;
-    runPart('speed', options, tools, () => ({
+    await runPart('speed', options, tools, () => ({
       repeats,
       files: files.map(({ label, file }, i) => {
         progress(`speed ${i + 1}/${files.length}: ${label}`);
@@ -135,7 +136,13 @@ function main() {
     }));
   }
   if (options.parts.includes('scaling'))
-    runPart('scaling', options, tools, () => ({ plan: SCALING[mode], result: measureScaling(tools, path.join(options.out, 'scaling'), SCALING[mode]) }));
+    await runPart('scaling', options, tools, () => ({ plan: SCALING[mode], result: measureScaling(tools, path.join(options.out, 'scaling'), SCALING[mode]) }));
+
+  if (options.parts.includes('browser')) {
+    tools.require('three');
+    const sequences = files.filter(({ label }) => options.quick || label.startsWith('sequences/'));
+    await runPart('browser', options, tools, () => measureBrowser(tools, sequences, path.join(options.out, 'browser'), options.quick));
+  }
 
   // The page, from whatever parts have results.
   const parts = {};
@@ -154,7 +161,7 @@ function main() {
 }
 
 try {
-  process.exitCode = main();
+  process.exitCode = await main();
 } catch (error) {
   if (!(error instanceof StepError)) throw error;
   console.error(`bench: ${error.message}`);

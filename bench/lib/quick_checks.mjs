@@ -43,6 +43,12 @@ export function checkQuick(parts, doc, chartDir) {
     for (const name of ['EncodeWhole', 'DecodeWhole', 'DecodeApiClips', 'DecodeApiFrames', 'DecodeFrameCopyLimit'])
       expect(stages[name] && stages[name].vfps > 0, `${label}: codec_benchmark has no ${name} throughput`);
   }
+  for (const input of parts.browser?.inputs ?? []) {
+    expect(!input.failed, `${input.label}: browser: ${input.failed}`);
+    for (const kind of ['segmorph', 'gltfpack'])
+      expect(input[kind]?.brotli > 0 && input[kind]?.browser?.median > 0, `${input.label}: browser: no ${kind} bytes or load time`);
+  }
+  expect(parts.browser?.inputs?.length > 0, 'browser: no input measured');
   const scaling = parts.scaling?.result;
   expect(scaling && !scaling.failed, `scaling: ${scaling?.failed}`);
   for (const p of [...(scaling?.byVertices ?? []), ...(scaling?.byFrames ?? [])]) {

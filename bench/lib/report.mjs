@@ -4,6 +4,7 @@ import { mkdirSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { CODECS, leastBytesAt } from './rate_distortion.mjs';
 import { SPEED_ERROR, SPEED_GLTFPACK_BITS, STAGES } from './speed.mjs';
+import { LINKS_MBIT } from './browser.mjs';
 import { barChart, lineChart, panels } from './svg_chart.mjs';
 
 const BAKE = CODECS[6].family;
@@ -243,6 +244,38 @@ function speedAndMemory(speed, shapes, charts, lines, flags) {
   print();
 }
 
+// What a web page pays: bytes as delivered and load times in Chromium (bench/lib/browser.mjs).
+function browserPart(browser, lines, flags) {
+  const print = (line = '') => lines.push(line);
+  print('## In the browser');
+  print();
+  print(`Each sequence encoded by segmorph \`--error ${SPEED_ERROR}\` and by gltfpack 1.3 \`-cc -af 0\` swept over \`-vp\`, the ` +
+        'smallest gltfpack file at equal or lower KG (measured by `segmorph verify` after meshopt_decode.mjs) as the anchor. ' +
+        'Bytes as a web server sends them (brotli -q 11, gzip -9, raw). **Load**: the time GLTFLoader takes from the ' +
+        'bytes in memory to a scene ready to play, in one page of headless Chromium ' +
+        `(${browser.chromium ?? 'Chromium'}, software rendering, no GPU): segmorph's file with \`GLTFSegmorphExtension\` ` +
+        '(docs/web.md) and DRACOLoader, gltfpack\'s with MeshoptDecoder; the median of ' +
+        `${browser.repeats} loads after the page's first (**first**: that first load, which also starts the decoders' ` +
+        'WebAssembly and workers), and **decode** the decoder\'s own share (the plugin\'s WebAssembly decode, or ' +
+        'MeshoptDecoder.decodeGltfBuffer). **First frame at N Mbit/s**: brotli bytes / link rate + median load.');
+  print();
+  print(`| sequence | file | KG | brotli | gzip | raw | load (first) | decode | first frame at ${LINKS_MBIT.map((r) => `${r} Mbit/s`).join(' / ')} |`);
+  print('|---|---|---|---|---|---|---|---|---|');
+  const kb = (bytes) => `${(bytes / 1000).toFixed(1)} kB`;
+  const seconds = (bytes, rate, ms) => ((bytes * 8) / (rate * 1e6) + ms / 1000).toFixed(2);
+  for (const input of browser.inputs) {
+    if (input.failed) { flags.push(`${input.label}, browser: ${input.failed}`); continue; }
+    for (const [kind, name] of [['segmorph', `segmorph --error ${SPEED_ERROR}`], ['gltfpack', `gltfpack ${input.gltfpack.setting}`]]) {
+      const f = input[kind], b = f.browser;
+      if (!b) continue;
+      print(`| ${input.label} | ${name} | ${f.kg.toPrecision(3)} %${f.kg_higher ? ' (higher)' : ''} | ${kb(f.brotli)} | ${kb(f.gzip)} | ` +
+            `${kb(f.raw)} | ${ms(b.median)} ms (${ms(b.first)}) | ${ms(b.decode.median)} ms | ` +
+            `${LINKS_MBIT.map((rate) => `${seconds(f.brotli, rate, b.median)} s`).join(' / ')} |`);
+    }
+  }
+  print();
+}
+
 // Log-log slope of `y` against `x` between two points: the exponent of the growth.
 const exponent = (a, b, x, y) => Math.log(y(b) / y(a)) / Math.log(x(b) / x(a));
 
@@ -361,6 +394,13 @@ function summary(parts, lines) {
                   `${((c.stages.DecodeApiFrames.ms / c.stages.DecodeWhole.ms - 1) * 100).toFixed(1)} %`);
     if (api.length) print(`- The runtime decoder's C API (whole clips / frame by frame) over the tool's decoder: ${api.join(', ')}.`);
   }
+  const web = (parts.browser?.inputs ?? []).filter((i) => !i.failed && i.segmorph.browser && i.gltfpack.browser);
+  if (web.length) {
+    const rate = LINKS_MBIT[0];
+    const at = (f) => (f.brotli * 8) / (rate * 1e6) + f.browser.median / 1000;
+    print(`- In Chromium, the first played frame over a ${rate} Mbit/s link (brotli bytes / rate + load): ` +
+          web.map((i) => `${path.basename(i.label)} ${at(i.segmorph).toFixed(2)} s (gltfpack ${at(i.gltfpack).toFixed(2)} s)`).join(', ') + '.');
+  }
   const scaling = parts.scaling?.result;
   if (scaling && !scaling.failed && scaling.byVertices.length > 1) {
     const [a, z] = [scaling.byVertices[0], scaling.byVertices[scaling.byVertices.length - 1]];
@@ -381,7 +421,7 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   charts.link = (name) => path.relative(path.dirname(doc), path.join(chartDir, name)).split(path.sep).join('/');
   const lines = [], flags = [];
   const print = (line = '') => lines.push(line);
-  const anyMeta = parts.rd?.meta || parts.speed?.meta || parts.scaling?.meta;
+  const anyMeta = parts.rd?.meta || parts.speed?.meta || parts.scaling?.meta || parts.browser?.meta;
   print('# Benchmarks');
   print();
   print(quick ? 'The quick mode of the harness (the test suite runs it): one file, two segmorph rates, one setting per ' +
@@ -401,8 +441,8 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   print('```');
   print();
   print('It writes every file and log under `out/bench/` (`results/*.json` hold the figures), then this page and ' +
-        '`docs/bench/*.svg`. `--parts rd,speed,scaling` runs some parts only (the page is rebuilt from the saved results ' +
-        'of all three); `--quick` is the test suite\'s small run (ctest `bench_quick`). Exit status 1 when a step fails ' +
+        '`docs/bench/*.svg`. `--parts rd,speed,scaling,browser` runs some parts only (the page is rebuilt from the saved ' +
+        'results of all four); `--quick` is the test suite\'s small run (ctest `bench_quick`). Exit status 1 when a step fails ' +
         'or a segmorph file misses its error bound.');
   print();
   if (anyMeta) {
@@ -411,7 +451,8 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
     print(`- Machine: ${anyMeta.machine}. Other work shared the 2 cores while this ran (the load averages below), so ` +
           'times are upper bounds; CPU times are steadier than wall times.');
     print(`- segmorph revision ${anyMeta.revision}; ${anyMeta.versions.join('; ')}.`);
-    for (const [name, key] of [['Rate and distortion', 'rd'], ['Speed and memory', 'speed'], ['Scaling', 'scaling']])
+    for (const [name, key] of [['Rate and distortion', 'rd'], ['Speed and memory', 'speed'], ['Scaling', 'scaling'],
+                               ['In the browser', 'browser']])
       if (parts[key]) print(metaLine(name, parts[key].meta));
     print();
   }
@@ -420,6 +461,7 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   const shapes = new Map((parts.rd?.files ?? []).map((f) => [f.label, f.shape]));
   if (parts.speed) speedAndMemory(parts.speed, shapes, charts, lines, flags);
   if (parts.scaling) scalingPart(parts.scaling, charts, lines, flags);
+  if (parts.browser) browserPart(parts.browser, lines, flags);
   print('## Flags');
   print();
   print('Failed steps and segmorph files above their error bound (the harness exits with 1 when there is one).');
