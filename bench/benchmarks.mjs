@@ -140,8 +140,16 @@ async function main() {
 
   if (options.parts.includes('browser')) {
     tools.require('three');
-    const sequences = files.filter(({ label }) => options.quick || label.startsWith('sequences/'));
-    await runPart('browser', options, tools, () => measureBrowser(tools, sequences, path.join(options.out, 'browser'), options.quick));
+    const web = path.join(options.build, 'web', 'segmorph_decoder.wasm');
+    if (!existsSync(web) && options.quick) {
+      // A build without the web package (the sanitizers' build): nothing to load in a browser.
+      progress(`browser: skipped, ${web} is absent (a build without the WebAssembly decoder)`);
+      rmSync(path.join(options.out, 'results', 'browser.json'), { force: true });
+    } else {
+      if (!existsSync(web)) throw new StepError(`${web} is missing; build it: .ci/build release (bash .ci/setup installs its toolchain)`);
+      const sequences = files.filter(({ label }) => options.quick || label.startsWith('sequences/'));
+      await runPart('browser', options, tools, () => measureBrowser(tools, sequences, path.join(options.out, 'browser'), options.quick));
+    }
   }
 
   // The page, from whatever parts have results.

@@ -67,7 +67,7 @@ export async function measureBrowser(tools, inputs, dir, quick) {
     const page = await browser.newPage();
     page.setDefaultTimeout(600000);
     await page.goto(`http://127.0.0.1:${server.address().port}/bench/index.html`);
-    await page.waitForFunction(() => window.ready === true);
+    await page.waitForFunction(() => window.ready === true, null, { timeout: 60000 });
     const repeats = quick ? 1 : 5;
     for (const input of measured) {
       if (input.failed) continue;

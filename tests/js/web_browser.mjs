@@ -85,7 +85,7 @@ try {
   page.on('console', (message) => { if (message.type() === 'error') consoleErrors.push(message.text()); });
   page.on('pageerror', (error) => consoleErrors.push(error.message));
   await page.goto(`${origin}/pages/compare.html`);
-  await page.waitForFunction(() => window.ready === true);
+  await page.waitForFunction(() => window.ready === true, null, { timeout: 60000 });
 
   // 1. Every case, and the cow (or the first clip file) streamed and in workers.
   const runs = cases.map((c) => ({ ...c, options: {} }));
@@ -127,7 +127,7 @@ try {
   const viewer = await browser.newPage({ viewport: { width: 640, height: 480 } });
   viewer.on('pageerror', (error) => consoleErrors.push(`viewer: ${error.message}`));
   await viewer.goto(`${origin}/viewer/`);
-  await viewer.waitForFunction(() => window.viewer !== undefined);
+  await viewer.waitForFunction(() => window.viewer !== undefined, null, { timeout: 60000 });
   const shown = await viewer.evaluate(async (url) => {
     // Dropped on the page, as a user drops a file.
     const bytes = await (await fetch(url)).arrayBuffer();
