@@ -170,7 +170,7 @@ int main(int argc, char** argv) {
 
   const std::vector<float> base = bench::stand_in_base(clip);
   std::vector<uint8_t> stream;
-  EncodeReport report;
+  StreamReport report;
   start = Clock::now();
   status = encode_animation(clips, base, settings, stream, &report);
   const double encode_ms = milliseconds_since(start);

@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
   const std::vector<float> base = bench::stand_in_base(clips[0]);
 
   std::vector<uint8_t> stream;
-  EncodeReport report;
+  StreamReport report;
   std::vector<FrameSequence> reconstruction, decoded;
   auto start = std::chrono::steady_clock::now();
   status = encode_animation(clips, base, settings, stream, &report, &reconstruction);
@@ -101,7 +101,7 @@ int main(int argc, char** argv) {
       "%s: V=%zu F=%zu K=%zu E(Pi) %.6f -> %.6f | stream %zu B (motion %zu, residuals %zu) %.3f bpvf | "
       "KG %.4f %% RMSE/diag %.2e | encode %.0f ms (segmentation %.0f, motion %.0f, prediction %.0f, rate "
       "control %.0f, entropy %.0f) decode %.1f ms | decode == encoder: %s%s\n",
-      argv[1], vertex_count, frame_count, report.clusters, report.e_pi_before_refinement, report.e_pi, stream.size(),
+      argv[1], vertex_count, frame_count, report.clusters, report.e_pi_morse, report.e_pi, stream.size(),
       report.bytes_motion, report.bytes_residuals, bits_per_vertex_frame(stream.size(), vertex_count, frame_count),
       metrics.kg_percent, metrics.rmse_over_diagonal, encode_ms, report.ms_segmentation, report.ms_motion,
       report.ms_prediction, report.ms_rate_control, report.ms_entropy, decode_ms, closed_loop ? "yes" : "NO",

@@ -8,15 +8,10 @@
 #include <vector>
 
 #include "frame_sequence.h"
+#include "segmorph/segmorph.h"  // RateMode, StreamReport
 #include "segmorph/status.h"
 
 namespace segmorph {
-
-enum class RateMode {
-  error,     // target: KG error in percent
-  bpvf,      // target: bits per vertex per frame of the whole output
-  lossless,  // restore the input floats bit for bit
-};
 
 struct CodecSettings {
   RateMode mode = RateMode::error;
@@ -35,23 +30,11 @@ struct CodecSettings {
   size_t outside_bytes = 0;
 };
 
-struct EncodeReport {
-  size_t clusters = 0;
-  double e_pi_before_refinement = 0;  // E(Π) of the Morse segmentation (Table 2's definition)
-  double e_pi = 0;                    // E(Π) after refinement
-  int refinement_iterations = 0;
-  double residual_steps[3] = {0, 0, 0};
-  double kg_percent = 0;  // of the encoder's own reconstruction
-  size_t bytes_motion = 0, bytes_residuals = 0, bytes_total = 0;
-  // Milliseconds per stage.
-  double ms_segmentation = 0, ms_motion = 0, ms_prediction = 0, ms_rate_control = 0, ms_entropy = 0;
-};
-
 // clips: the primitive's clips (same V and triangles; frame 0 of clip 0 is the base frame). base: V × 3, the
 // base positions exactly as the decoder will have them. On success `stream` holds the encoded bytes and
 // `reconstruction` (if given) the frames a decoder will produce, bit for bit.
 Status encode_animation(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
-                        const CodecSettings& settings, std::vector<uint8_t>& stream, EncodeReport* report = nullptr,
+                        const CodecSettings& settings, std::vector<uint8_t>& stream, StreamReport* report = nullptr,
                         std::vector<FrameSequence>* reconstruction = nullptr);
 
 // ‖A − E(A)‖²_F: the squared distance of every position of every frame from its frame's centroid (the

@@ -168,12 +168,12 @@ double expected_residual_step(const std::vector<FrameSequence>& clips, double sp
 }
 
 Status encode_animation(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
-                        const CodecSettings& settings, std::vector<uint8_t>& stream, EncodeReport* report_out,
+                        const CodecSettings& settings, std::vector<uint8_t>& stream, StreamReport* report_out,
                         std::vector<FrameSequence>* reconstruction) {
   SEGMORPH_RETURN_IF_ERROR(check_input(clips, base));
   if (settings.mode != RateMode::lossless && !(settings.target > 0))
     return Status(StatusCode::invalid_argument, "the rate target must be positive");
-  EncodeReport report;
+  StreamReport report;
   const size_t vertex_count = clips[0].vertex_count;
   const WeldedTopology topology = weld_topology(clips, &base);
   const VertexAdjacency adjacency = vertex_adjacency(topology);
@@ -213,7 +213,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   MorseBands bands;
   const MorseSettings morse_settings;
   Clusters clusters = morse_segmentation(morse.mu, topology, adjacency, morse_settings, &bands);
-  report.e_pi_before_refinement = motion_compensation_error(
+  report.e_pi_morse = motion_compensation_error(
       base_welded.data(), trajectories, clusters, fit_affine_motion(base_welded.data(), trajectories, clusters));
   if (settings.curvature_refinement) {
     const MorseBands refined = refine_levels(morse.mu, minimum_curvature(positions, topology), topology, adjacency,
@@ -222,7 +222,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   }
   // The scale of the residual steps: from the target error when there is one, else from the motion error.
   const double spread = frame_spread(clips);
-  double mean_step = std::sqrt(12.0 * std::max(report.e_pi_before_refinement, 1e-12)) *
+  double mean_step = std::sqrt(12.0 * std::max(report.e_pi_morse, 1e-12)) *
                      bounding_box_diagonal(base.data(), vertex_count) * 0.1;
   if (settings.mode == RateMode::error) mean_step = expected_residual_step(clips, spread, settings.target);
   double extent = bounding_box_diagonal(base.data(), vertex_count);

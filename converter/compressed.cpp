@@ -140,7 +140,7 @@ struct PrimitiveEncoding {
   DracoPrimitive draco_primitive;
   BaseMesh decoded;              // the base mesh as a loader gets it back from Draco
   std::vector<uint32_t> source;  // per decoded vertex, the original vertex it came from
-  EncodeReport report;
+  StreamReport report;
   std::vector<FrameSequence> reconstruction;  // what the stream decodes to, in the decoded vertex order
 };
 
@@ -208,7 +208,7 @@ std::vector<FrameSequence> in_decoded_order(const std::vector<FrameSequence>& cl
 Status encode_stream(const std::vector<FrameSequence>& reordered, const CodecSettings& settings,
                      const std::string& what, PrimitiveEncoding& encoding) {
   const BaseMesh& decoded = encoding.decoded;
-  encoding.report = EncodeReport();
+  encoding.report = StreamReport();
   SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, settings, encoding.stream,
                                             &encoding.report, &encoding.reconstruction));
   std::vector<FrameSequence> check;
@@ -422,6 +422,14 @@ Status decode_primitive_stream(const tinygltf::Model& model, const tinygltf::Pri
     if (!status.ok()) return failed(status);
   }
   return Status::Ok();
+}
+
+// What decode_compressed_model reports of a primitive's decoded clips.
+DecodedFrames decoded_frames(int mesh, int primitive, bool targets, const std::vector<FrameSequence>& clips) {
+  DecodedFrames out;
+  out.mesh = mesh, out.primitive = primitive, out.targets = targets;
+  for (const FrameSequence& clip : clips) out.clips.push_back({clip.vertex_count, clip.frame_count, clip.positions});
+  return out;
 }
 
 // Decodes the stream of a primitive that keeps its morph targets and fills the targets in: POSITION with the
@@ -746,7 +754,7 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std:
         SEGMORPH_RETURN_IF_ERROR(restore_targets(model, model.meshes[m].primitives[p], primitives[p],
                                                  what + " primitive " + std::to_string(p), bytes,
                                                  decoded ? &displacements : nullptr));
-        if (decoded) decoded->push_back({int(m), int(p), true, std::move(displacements)});
+        if (decoded) decoded->push_back(decoded_frames(int(m), int(p), true, displacements));
         found.animation_bytes += bytes;
         ++found.primitives;
       }
@@ -812,7 +820,7 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std:
       found.animation_bytes += bytes;
       ++found.primitives;
       for (size_t c = 0; c < out.clips.size(); ++c) out.clips[c].times = std::move(times[c]);
-      if (decoded) decoded->push_back({animated[i].mesh, int(p), false, out.clips});
+      if (decoded) decoded->push_back(decoded_frames(animated[i].mesh, int(p), false, out.clips));
       node.primitives.push_back(std::move(out));
       primitive.extensions.erase(kExtensionName);
     }

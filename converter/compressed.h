@@ -12,12 +12,13 @@
 #include "codec.h"
 #include "draco_base_mesh.h"
 #include "sample.h"
+#include "segmorph/segmorph.h"
 #include "segmorph/status.h"
 
 namespace segmorph {
 
 struct CompressReport {
-  std::vector<EncodeReport> primitives;  // one per encoded primitive
+  std::vector<StreamReport> primitives;  // one per encoded primitive
   size_t draco_bytes = 0, animation_bytes = 0;
   double ms_draco = 0;  // the base meshes: Draco encoding, the decoding the encoder needs, the vertex map back
 };
@@ -49,18 +50,12 @@ struct DecodedSizes {
   size_t coded_animations = 0;  // animations whose tracks were coded
 };
 
-// What a compressed primitive's stream decoded to: for one that plays clips, its clips' frames (positions); for one
-// that keeps its morph targets, one clip whose T frames are the targets' POSITION displacements (frame − base).
-struct DecodedFrames {
-  int mesh = -1, primitive = -1;
-  bool targets = false;
-  std::vector<FrameSequence> clips;
-};
 
 // Replaces KHR_draco_mesh_compression primitives by plain accessors, then decodes SEGMORPH_animation_compression
 // primitives with the runtime decoder (include/segmorph/decoder.h): those that keep morph targets get them back, the
 // others take the form bake writes. A model with neither is left as it is. `decoded`, when given, receives what each
-// compressed primitive's stream decoded to, in the order of meshes and primitives.
+// compressed primitive's stream decoded to (DecodedFrames, include/segmorph/segmorph.h), in the order of meshes and
+// primitives.
 Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes = nullptr,
                                std::vector<DecodedFrames>* decoded = nullptr);
 

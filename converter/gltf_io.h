@@ -6,6 +6,7 @@
 
 #include <tiny_gltf.h>
 
+#include "segmorph/segmorph.h"
 #include "segmorph/status.h"
 
 namespace segmorph {
@@ -31,7 +32,6 @@ Status save_file(const std::string& path, const void* data, size_t size);
 // The bytes save_gltf would write for `model` as a .glb (images that are files included as it embeds them).
 size_t glb_size(tinygltf::Model model);
 
-// True when `path` ends in .glb or .gltf (case-insensitive).
-bool has_gltf_extension(const std::string& path);
+// has_gltf_extension(path) is declared in include/segmorph/segmorph.h.
 
 }  // namespace segmorph

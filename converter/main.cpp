@@ -1,20 +1,12 @@
-// segmorph: the command-line tool.
+// segmorph: the command-line tool, argument parsing and printing over the pipeline API (include/segmorph/segmorph.h).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
 
-#include "bake.h"
-#include "comparison.h"
-#include "compressed.h"
-#include "gltf_io.h"
-#include "metrics.h"
-#include "moving_meshes.h"
-#include "sample.h"
+#include "segmorph/segmorph.h"
 #include "segmorph/version.h"
-#include "topology.h"
-#include "tracks.h"
 
 namespace segmorph {
 namespace {
@@ -93,11 +85,8 @@ struct Options {
   std::string output;
   std::string frames;  // decode --frames: the decoded frames as raw floats
   SampleSettings sampling;
-  CodecSettings codec;
-  DracoSettings draco;  // position_bits 0: compress_model chooses them
+  EncodeSettings encode;  // its sampling is `sampling`
   bool rate_given = false;
-  enum class Targets { automatic, keep, bake } targets = Targets::automatic;
-  enum class Skins { keep, bake } skins = Skins::keep;
   bool json = false;
   bool quiet = false;
 };
@@ -135,391 +124,102 @@ std::string json_string(const std::string& s) {
   return out + "\"";
 }
 
-// A file loaded, analyzed and sampled. Not copyable: sampled nodes point into scene.
-struct SampledFile {
-  tinygltf::Model model;
-  Scene scene;
-  std::vector<SampledNode> sampled;  // empty after load_and_analyze alone
-  DecodedSizes decoded;              // what an encoded file held
-};
-
-// Reads `path`, decodes what is encoded and finds the animated nodes.
-Status load_and_analyze(const std::string& path, const Options& options, SampledFile& file) {
+// Reads `path` into `model`, its warnings as progress.
+Status load(const std::string& path, const Options& options, Model& model) {
   progress(options, "reading " + path);
   std::vector<std::string> warnings;
-  SEGMORPH_RETURN_IF_ERROR(load_gltf(path, file.model, &warnings));
+  SEGMORPH_RETURN_IF_ERROR(Model::load(path, model, &warnings));
   for (const std::string& warning : warnings) progress(options, "warning: " + path + ": " + warning);
-  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(file.model, &file.decoded));
-  return analyze_scene(file.model, file.scene);
+  return Status::Ok();
 }
 
-Status load_and_sample(const std::string& path, const Options& options, SampledFile& file) {
-  SEGMORPH_RETURN_IF_ERROR(load_and_analyze(path, options, file));
-  const tinygltf::Model& model = file.model;
-  const Scene& scene = file.scene;
-  std::vector<SampledNode>& sampled = file.sampled;
-  sampled.resize(scene.animated.size());
-  for (size_t i = 0; i < scene.animated.size(); ++i) {
-    const AnimatedNode& node = scene.animated[i];
-    progress(options, "sampling " + node_name(model, node.node) + " (" + std::to_string(i + 1) + "/" +
-                          std::to_string(scene.animated.size()) + "), " + std::to_string(node.clips.size()) + " clip" +
-                          (node.clips.size() == 1 ? "" : "s"));
-    SEGMORPH_RETURN_IF_ERROR(sample_node(model, scene, node, options.sampling, sampled[i]));
-  }
-  return Status::Ok();
+Progress progress_of(const Options& options) {
+  return [&options](const std::string& message) { progress(options, message); };
 }
 
 int run_info(const Options& options) {
   const std::string& path = options.inputs[0];
-  SampledFile file;
-  Status status = load_and_sample(path, options, file);
+  Model model;
+  InfoReport report;
+  Status status = load(path, options, model);
+  if (status.ok()) status = info(model, options.sampling, report, progress_of(options));
   if (!status.ok()) return fail(path, status);
-  const tinygltf::Model& model = file.model;
-  const Scene& scene = file.scene;
-  const std::vector<SampledNode>& sampled = file.sampled;
 
   std::string json = "{\"file\":" + json_string(path) + ",\"primitives\":[";
   std::string text;
-  size_t primitive_count = 0;
-  for (const SampledNode& node : sampled) {
-    const AnimatedNode& animated = *node.node;
-    for (const SampledPrimitive& primitive : node.primitives) {
-      const FrameSequence& first = primitive.clips[0];
-      const WeldedTopology topology = weld_topology(primitive.clips);
-      if (primitive_count++) json += ",";
-      json += "{\"node\":" + std::to_string(animated.node) +
-              ",\"node_name\":" + json_string(model.nodes[size_t(animated.node)].name) +
-              ",\"mesh\":" + std::to_string(animated.mesh) + ",\"primitive\":" + std::to_string(primitive.primitive) +
-              ",\"kind\":" + json_string(animated.kind()) + ",\"vertices\":" + std::to_string(first.vertex_count) +
-              ",\"triangles\":" + std::to_string(first.triangle_count()) +
-              ",\"welded_vertices\":" + std::to_string(topology.welded_count()) +
-              ",\"connected_components\":" + std::to_string(topology.component_count) + ",\"clips\":[";
-      text += node_name(model, animated.node) + ", mesh " + std::to_string(animated.mesh) + " primitive " +
-              std::to_string(primitive.primitive) + ": " + animated.kind() + ", " + std::to_string(first.vertex_count) +
-              " vertices (" + std::to_string(topology.welded_count()) + " welded), " +
-              std::to_string(first.triangle_count()) + " triangles, " + std::to_string(topology.component_count) +
-              " connected component" + (topology.component_count == 1 ? "" : "s") + "\n";
-      for (size_t c = 0; c < primitive.clips.size(); ++c) {
-        const FrameSequence& clip = primitive.clips[c];
-        const std::string& name = scene.clips[size_t(animated.clips[c])].name;
-        const double duration = clip.times.back() - clip.times.front();
-        const size_t bytes = clip.frame_count * clip.vertex_count * 3 * sizeof(float);
-        char line[512];
-        std::snprintf(line, sizeof(line), "  clip %d %s: %zu frames, %.3f s, baked frames %zu bytes\n",
-                      scene.clips[size_t(animated.clips[c])].animation, json_string(name).c_str(), clip.frame_count,
-                      duration, bytes);
-        text += line;
-        std::snprintf(line, sizeof(line),
-                      "%s{\"animation\":%d,\"name\":%s,\"frames\":%zu,\"duration\":%.6g,\"baked_bytes\":%zu}",
-                      c ? "," : "", scene.clips[size_t(animated.clips[c])].animation, json_string(name).c_str(),
-                      clip.frame_count, duration, bytes);
-        json += line;
-      }
-      json += "]}";
+  for (size_t p = 0; p < report.primitives.size(); ++p) {
+    const PrimitiveInfo& primitive = report.primitives[p];
+    const std::string name = primitive.node_name.empty() ? "node " + std::to_string(primitive.node) : primitive.node_name;
+    if (p) json += ",";
+    json += "{\"node\":" + std::to_string(primitive.node) + ",\"node_name\":" + json_string(primitive.node_name) +
+            ",\"mesh\":" + std::to_string(primitive.mesh) + ",\"primitive\":" + std::to_string(primitive.primitive) +
+            ",\"kind\":" + json_string(primitive.kind) + ",\"vertices\":" + std::to_string(primitive.vertices) +
+            ",\"triangles\":" + std::to_string(primitive.triangles) +
+            ",\"welded_vertices\":" + std::to_string(primitive.welded_vertices) +
+            ",\"connected_components\":" + std::to_string(primitive.connected_components) + ",\"clips\":[";
+    text += name + ", mesh " + std::to_string(primitive.mesh) + " primitive " + std::to_string(primitive.primitive) +
+            ": " + primitive.kind + ", " + std::to_string(primitive.vertices) + " vertices (" +
+            std::to_string(primitive.welded_vertices) + " welded), " + std::to_string(primitive.triangles) +
+            " triangles, " + std::to_string(primitive.connected_components) + " connected component" +
+            (primitive.connected_components == 1 ? "" : "s") + "\n";
+    for (size_t c = 0; c < primitive.clips.size(); ++c) {
+      const ClipInfo& clip = primitive.clips[c];
+      char line[512];
+      std::snprintf(line, sizeof(line), "  clip %d %s: %zu frames, %.3f s, baked frames %zu bytes\n", clip.animation,
+                    json_string(clip.name).c_str(), clip.frames, clip.duration, clip.baked_bytes);
+      text += line;
+      std::snprintf(line, sizeof(line),
+                    "%s{\"animation\":%d,\"name\":%s,\"frames\":%zu,\"duration\":%.6g,\"baked_bytes\":%zu}",
+                    c ? "," : "", clip.animation, json_string(clip.name).c_str(), clip.frames, clip.duration,
+                    clip.baked_bytes);
+      json += line;
     }
+    json += "]}";
   }
   json += "]}";
+  const size_t count = report.primitives.size();
   if (options.json)
     std::printf("%s\n", json.c_str());
   else
-    std::printf("%s: %zu animated primitive%s, %zu animation%s\n%s", path.c_str(), primitive_count,
-                primitive_count == 1 ? "" : "s", model.animations.size(), model.animations.size() == 1 ? "" : "s",
-                text.c_str());
+    std::printf("%s: %zu animated primitive%s, %zu animation%s\n%s", path.c_str(), count, count == 1 ? "" : "s",
+                report.animations, report.animations == 1 ? "" : "s", text.c_str());
   return 0;
 }
 
 int run_bake(const Options& options) {
   const std::string& path = options.inputs[0];
-  SampledFile file;
-  Status status = load_and_sample(path, options, file);
-  if (!status.ok()) return fail(path, status);
-  const std::vector<SampledNode>& sampled = file.sampled;
-  status = bake_model(file.model, file.scene, sampled);
+  Model model;
+  BakeReport report;
+  Status status = load(path, options, model);
+  if (status.ok()) status = bake(model, options.sampling, &report, progress_of(options));
   if (!status.ok()) return fail(path, status);
   progress(options, "writing " + options.output);
-  status = save_gltf(file.model, options.output);
+  status = model.save(options.output);
   if (!status.ok()) return fail(options.output, status);
-  size_t frames = 0;
-  for (const SampledNode& node : sampled)
-    for (const FrameSequence& clip : node.primitives[0].clips) frames += clip.frame_count;
-  progress(options, "baked " + std::to_string(sampled.size()) + " animated node" + (sampled.size() == 1 ? "" : "s") +
-                        ", " + std::to_string(frames) + " frames in all");
+  progress(options, "baked " + std::to_string(report.nodes) + " animated node" + (report.nodes == 1 ? "" : "s") + ", " +
+                        std::to_string(report.frames) + " frames in all");
   return 0;
-}
-
-// Bytes of a glTF file and of the files its buffers and images name (a .gltf's .bin).
-size_t file_bytes(const std::string& path, const tinygltf::Model& model) {
-  auto size_of = [](const std::string& file) -> size_t {
-    std::FILE* handle = std::fopen(file.c_str(), "rb");
-    if (!handle) return 0;
-    std::fseek(handle, 0, SEEK_END);
-    const long size = std::ftell(handle);
-    std::fclose(handle);
-    return size > 0 ? size_t(size) : 0;
-  };
-  size_t total = size_of(path);
-  const size_t slash = path.find_last_of('/');
-  const std::string directory = slash == std::string::npos ? "" : path.substr(0, slash + 1);
-  for (const tinygltf::Buffer& buffer : model.buffers)
-    if (!buffer.uri.empty() && buffer.uri.rfind("data:", 0) != 0) total += size_of(directory + buffer.uri);
-  for (const tinygltf::Image& image : model.images)
-    if (!image.uri.empty() && image.uri.rfind("data:", 0) != 0) total += size_of(directory + image.uri);
-  return total;
-}
-
-// Whether encode keeps the morph targets of `node` (see --targets): an unskinned morph mesh that only this node
-// uses, in a lossy encode, with at most half as many targets as frames unless asked to keep them.
-bool keeps_targets(const tinygltf::Model& model, const AnimatedNode& node, const SampledNode& sampled,
-                   const Options& options) {
-  if (options.targets == Options::Targets::bake || options.codec.mode == RateMode::lossless) return false;
-  if (!node.morphed || node.skin >= 0) return false;
-  size_t users = 0;
-  for (const tinygltf::Node& other : model.nodes) users += other.mesh == node.mesh;
-  if (users != 1) return false;
-  if (options.targets == Options::Targets::keep) return true;
-  size_t frames = 0;
-  for (const FrameSequence& clip : sampled.primitives[0].clips) frames += clip.frame_count;
-  return 2 * sampled.primitives[0].target_deltas.size() <= frames;
-}
-
-struct Encoded {
-  tinygltf::Model model;
-  CompressReport report;
-  double kept_skins_floor = 0;  // when kept skins cannot reach the --error target: the KG % they stay at
-};
-
-// A --bpvf result within this factor of its target meets it (the codec aims a little below).
-constexpr double kBpvfTolerance = 1.05;
-
-// Bits per vertex per frame are counted over Σ V × F of the sampled primitives and clips.
-double vertex_frames(const std::vector<SampledNode>& sampled) {
-  double total = 0;
-  for (const SampledNode& node : sampled)
-    for (const SampledPrimitive& primitive : node.primitives)
-      for (const FrameSequence& clip : primitive.clips) total += double(clip.vertex_count) * double(clip.frame_count);
-  return total;
-}
-
-// Whether encode keeps the skin of `node` (see --skins): a skinned mesh without morph targets, with an error
-// target (a kept skin's error is searched for; --bpvf rate control and --lossless are the codec's, on baked frames).
-bool keeps_skin(const AnimatedNode& node, const Options& options) {
-  return options.skins == Options::Skins::keep && options.codec.mode == RateMode::error && node.skin >= 0 &&
-         !node.morphed;
-}
-
-// Draco's share of the KG error target in the meshes compress_moving_meshes takes.
-constexpr double kMovingMeshErrorShare = 0.6;
-// The tracks' quantization distance (TrackPrecision) where nothing measured depends on it: this fraction of the
-// error target times the scene's diagonal, about what the search below settles on for kept skins.
-constexpr double kTrackDistanceRatio = 0.25;
-// The search for kept skins: KG within kSearchGoal of the target; a bracket in at most kSearchBracketRounds
-// doublings or halvings, then kSearchHalvings bisections of it (in log distance).
-constexpr double kSearchGoal = 0.99;
-constexpr int kSearchBracketRounds = 8, kSearchHalvings = 4;
-
-// The KG error target (%) the meshes and tracks outside the codec aim at: --error's, else the default one.
-double error_target(const CodecSettings& codec) {
-  return codec.mode == RateMode::error ? codec.target : CodecSettings().target;
-}
-
-// The worst KG error (%) of `encoded` against the file it was encoded from, as verify measures it.
-Status measured_kg(const SampledFile& file, tinygltf::Model encoded, double& kg) {
-  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(encoded));
-  Scene scene;
-  SEGMORPH_RETURN_IF_ERROR(analyze_scene(encoded, scene));
-  AnimationComparison comparison;
-  SEGMORPH_RETURN_IF_ERROR(compare_animation(file.model, file.scene, file.sampled, encoded, scene, comparison));
-  kg = comparison.worst.kg_percent;
-  return Status::Ok();
-}
-
-// Codes the tracks of `out.model` (whose kept skins depend on them): with --error, the coarsest quantization
-// distance (a factor of 2 apart, then halved 4 times) whose measured KG is within the target; otherwise the rule
-// of kTrackDistanceRatio.
-Status encode_tracks_for(const SampledFile& file, const CodecSettings& codec, bool measured, Encoded& out) {
-  const double first = kTrackDistanceRatio * error_target(codec) / 100 * scene_diagonal(out.model);
-  auto encode = [&](double distance, Encoded& result, TrackReport& report) {
-    result.model = out.model;
-    report = TrackReport();
-    return compress_tracks(result.model, TrackPrecision{distance}, report);
-  };
-  TrackReport report;
-  if (!measured || codec.mode != RateMode::error) {
-    SEGMORPH_RETURN_IF_ERROR(encode(first, out, report));
-    out.report.animation_bytes += report.bytes;
-    return Status::Ok();
-  }
-  const double goal = kSearchGoal * codec.target;
-  Encoded candidate;
-  double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
-  auto within_goal = [&](double distance, bool& ok) {
-    SEGMORPH_RETURN_IF_ERROR(encode(distance, candidate, report));
-    SEGMORPH_RETURN_IF_ERROR(measured_kg(file, candidate.model, kg));
-    ok = kg <= goal;
-    return Status::Ok();
-  };
-  bool ok = false;
-  double distance = first;
-  for (int round = 0; round < kSearchBracketRounds; ++round) {
-    SEGMORPH_RETURN_IF_ERROR(within_goal(distance, ok));
-    (ok ? within : beyond) = distance;
-    if (within > 0 && beyond > 0) break;
-    distance = ok ? distance * 2 : distance / 2;
-  }
-  if (within == 0) {  // the error is not the tracks' (a kept skin's weights are bytes): the caller bakes instead
-    out.kept_skins_floor = kg;
-    return Status::Ok();
-  }
-  for (int round = 0; beyond > 0 && round < kSearchHalvings; ++round) {
-    distance = std::sqrt(within * beyond);
-    SEGMORPH_RETURN_IF_ERROR(within_goal(distance, ok));
-    (ok ? within : beyond) = distance;
-  }
-  SEGMORPH_RETURN_IF_ERROR(encode(within, out, report));
-  out.report.animation_bytes += report.bytes;
-  return Status::Ok();
-}
-
-// Encodes a copy of file's model with `codec`: the nodes `keep` marks keep their morph targets, skinned nodes whose
-// skin is kept are compressed with the meshes that move rigidly, the others are baked; then the tracks are coded.
-Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep, const CodecSettings& codec,
-                         const Options& options, Encoded& out) {
-  out.model = file.model;
-  out.report = CompressReport();
-  out.kept_skins_floor = 0;
-  std::vector<SampledNode> kept, baked;
-  std::vector<int> kept_skins;
-  for (size_t i = 0; i < file.sampled.size(); ++i) {
-    if (keeps_skin(*file.sampled[i].node, options))
-      kept_skins.push_back(file.sampled[i].node->node);
-    else
-      (keep[i] ? kept : baked).push_back(file.sampled[i]);
-  }
-  const auto report_progress = [&](const std::string& message) { progress(options, message); };
-  SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, codec, options.draco, out.report, report_progress));
-  SEGMORPH_RETURN_IF_ERROR(bake_model(out.model, file.scene, baked));
-  SEGMORPH_RETURN_IF_ERROR(compress_model(out.model, baked, codec, options.draco, out.report, report_progress));
-  if (codec.mode == RateMode::lossless) return Status::Ok();
-  // Draco's RMS error is half its step: a step of 2 × share × E / 100 of a mesh's spread is its share of KG E %.
-  const double step_ratio = 2 * kMovingMeshErrorShare * error_target(codec) / 100;
-  MovingMeshReport meshes;
-  // A rigid part's error counts against the whole it belongs to: a figure's spread is about a quarter of its
-  // diagonal.
-  const double rigid_spread = scene_diagonal(out.model) / 4;
-  SEGMORPH_RETURN_IF_ERROR(compress_moving_meshes(out.model, moving_meshes(out.model, kept_skins), options.draco,
-                                                  step_ratio, rigid_spread, meshes));
-  out.report.draco_bytes += meshes.bytes;
-  progress(options, kept_skins.empty() ? "coding the animation tracks"
-                                       : "coding the animation tracks, measuring the kept skins' error");
-  return encode_tracks_for(file, codec, !kept_skins.empty(), out);
-}
-
-// encode_model_once, and with --bpvf a second time: the rate is of the whole file, and the codec budgets only its
-// streams and base meshes, so the rest (JSON, images, other meshes and animations, kept weights), measured on the
-// first encode, comes off the codec's target.
-Status encode_model(const SampledFile& file, const std::vector<bool>& keep, const Options& options, Encoded& out) {
-  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, options.codec, options, out));
-  if (out.kept_skins_floor > 0) {
-    char line[200];
-    std::snprintf(line, sizeof(line),
-                  "kept skins stay at KG %.4f %% even with the finest tracks, above --error %g (their weights are "
-                  "bytes): baking them instead",
-                  out.kept_skins_floor, options.codec.target);
-    progress(options, line);
-    Options baked = options;
-    baked.skins = Options::Skins::bake;
-    SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, options.codec, baked, out));
-  }
-  if (options.codec.mode != RateMode::bpvf) return Status::Ok();
-  const double frames = vertex_frames(file.sampled);
-  const size_t coded = out.report.draco_bytes + out.report.animation_bytes, whole = glb_size(out.model);
-  const double rest = 8.0 * double(whole > coded ? whole - coded : 0) / frames;
-  char figures[200];
-  std::snprintf(figures, sizeof(figures), "%.3f bpvf, of which %.3f outside the animation streams and base meshes",
-                8.0 * double(whole) / frames, rest);
-  if (rest >= options.codec.target) {
-    char target[32];
-    std::snprintf(target, sizeof(target), "%g", options.codec.target);
-    return Status(StatusCode::invalid_argument, std::string("--bpvf ") + target +
-                                                    " is below what the rest of the file takes alone: the first "
-                                                    "encode came to " +
-                                                    figures);
-  }
-  progress(options, std::string("first encode: ") + figures + "; encoding again for the whole file's rate");
-  CodecSettings codec = options.codec;
-  codec.target -= rest;
-  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, codec, options, out));
-  const double reached = 8.0 * double(glb_size(out.model)) / frames;
-  if (reached > kBpvfTolerance * options.codec.target) {
-    char line[200];
-    std::snprintf(line, sizeof(line), "warning: --bpvf %g is out of reach for this file: it comes to %.3f bpvf",
-                  options.codec.target, reached);
-    progress(options, line);
-  }
-  return Status::Ok();
-}
-
-// The worst KG error (%) the encoder reports over the encoded primitives.
-double worst_kg(const CompressReport& report) {
-  double worst = 0;
-  for (const EncodeReport& primitive : report.primitives) worst = std::max(worst, primitive.kg_percent);
-  return worst;
 }
 
 int run_encode(const Options& options) {
   const std::string& path = options.inputs[0];
-  SampledFile file;
-  Status status = load_and_sample(path, options, file);
+  Model input, output;
+  EncodeReport report;
+  Status status = load(path, options, input);
+  if (status.ok()) status = encode(input, options.encode, output, &report, progress_of(options));
   if (!status.ok()) return fail(path, status);
-  // Morph-target meshes that keep their targets are compressed where they are; the others are baked first. With
-  // --targets auto, a file where some mesh could keep them is encoded both ways; the smaller file is kept (with
-  // --bpvf, where both come to the target's size, the one with the smaller worst error).
-  std::vector<bool> keep(file.sampled.size());
-  bool any_kept = false;
-  for (size_t i = 0; i < file.sampled.size(); ++i)
-    any_kept |= keep[i] = keeps_targets(file.model, *file.sampled[i].node, file.sampled[i], options);
-  Encoded encoded;
-  status = encode_model(file, keep, options, encoded);
-  if (any_kept && options.targets == Options::Targets::automatic) {
-    // Either variant may be refused (a --bpvf target below what its rest takes); the other then stands alone.
-    Encoded baked;
-    progress(options, "encoding again with the morph targets baked, to compare");
-    const Status baked_status = encode_model(file, std::vector<bool>(keep.size(), false), options, baked);
-    if (!status.ok() && baked_status.ok()) {
-      progress(options, "keeping the morph targets was refused (" + status.message() + "); the baked file stands");
-      encoded = std::move(baked), status = baked_status;
-    } else if (status.ok() && baked_status.ok()) {
-      const size_t kept_size = glb_size(encoded.model), baked_size = glb_size(baked.model);
-      const double kept_kg = worst_kg(encoded.report), baked_kg = worst_kg(baked.report);
-      char line[160];
-      std::snprintf(line, sizeof(line), "morph targets kept: %zu bytes, KG %.4f %%; baked: %zu bytes, KG %.4f %%",
-                    kept_size, kept_kg, baked_size, baked_kg);
-      progress(options, line);
-      // With --bpvf: the smaller error among the files within the target, else the smaller file.
-      const double budget = kBpvfTolerance * options.codec.target * vertex_frames(file.sampled) / 8;
-      const bool kept_fits = double(kept_size) <= budget, baked_fits = double(baked_size) <= budget;
-      const bool take_baked = options.codec.mode != RateMode::bpvf ? baked_size < kept_size
-                              : kept_fits != baked_fits            ? baked_fits
-                              : kept_fits                          ? baked_kg < kept_kg
-                                                                   : baked_size < kept_size;
-      if (take_baked) encoded = std::move(baked);
-    }
-  }
-  if (!status.ok()) return fail(path, status);
-  file.model = std::move(encoded.model);
-  const CompressReport& report = encoded.report;
   progress(options, "writing " + options.output);
-  status = save_gltf(file.model, options.output);
+  status = output.save(options.output);
   if (!status.ok()) return fail(options.output, status);
 
-  tinygltf::Model written;
-  const size_t bytes = load_gltf(options.output, written).ok() ? file_bytes(options.output, written) : 0;
-  const double vertex_frames = segmorph::vertex_frames(file.sampled);
-  double clusters = 0, e_pi = 0, e_pi_before = 0, ms[5] = {0, 0, 0, 0, 0};
-  for (const EncodeReport& r : report.primitives) {
+  Model written;
+  const size_t bytes = Model::load(options.output, written).ok() ? file_bytes(options.output, written) : 0;
+  const double vertex_frames = report.vertex_frames;
+  double clusters = 0, e_pi = 0, e_pi_morse = 0, ms[5] = {0, 0, 0, 0, 0};
+  for (const StreamReport& r : report.streams) {
     clusters += double(r.clusters);
     e_pi = std::max(e_pi, r.e_pi);
-    e_pi_before = std::max(e_pi_before, r.e_pi_before_refinement);
+    e_pi_morse = std::max(e_pi_morse, r.e_pi_morse);
     const double stage[5] = {r.ms_segmentation, r.ms_motion, r.ms_prediction, r.ms_rate_control, r.ms_entropy};
     for (int i = 0; i < 5; ++i) ms[i] += stage[i];
   }
@@ -530,108 +230,87 @@ int run_encode(const Options& options) {
         "\"e_pi_before_refinement\":%.6g,\"e_pi\":%.6g,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,"
         "\"draco_bytes\":%zu,\"animation_bytes\":%zu,\"milliseconds\":{\"segmentation\":%.1f,\"motion\":%.1f,"
         "\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"draco\":%.1f}}\n",
-        json_string(path).c_str(), json_string(options.output).c_str(), bytes, report.primitives.size(), clusters,
-        e_pi_before, e_pi, bpvf, vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0,
+        json_string(path).c_str(), json_string(options.output).c_str(), bytes, report.streams.size(), clusters,
+        e_pi_morse, e_pi, bpvf, vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0,
         report.draco_bytes, report.animation_bytes, ms[0], ms[1], ms[2], ms[3], ms[4], report.ms_draco);
   } else {
     std::printf("%s: %zu bytes, %.3f bits per vertex per frame (animation streams %zu bytes, Draco meshes %zu bytes)",
                 options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes);
-    if (report.primitives.empty())
+    if (report.streams.empty())
       std::printf("\n");
     else
       std::printf(", %zu primitive%s coded as frames, %.0f clusters, E(Pi) %.6f (before refinement %.6f)\n",
-                  report.primitives.size(), report.primitives.size() == 1 ? "" : "s", clusters, e_pi, e_pi_before);
+                  report.streams.size(), report.streams.size() == 1 ? "" : "s", clusters, e_pi, e_pi_morse);
   }
   return 0;
-}
-
-// The frames of every compressed primitive as decode --frames writes them: little-endian float32, primitive after
-// primitive, clip after clip, frame after frame.
-Status save_frames(const std::vector<DecodedFrames>& decoded, const std::string& path) {
-  static_assert(sizeof(float) == 4, "binary32 floats");
-  const uint16_t probe = 1;
-  uint8_t first;
-  std::memcpy(&first, &probe, 1);
-  if (first != 1) return Status(StatusCode::unsupported, "--frames writes little-endian floats: this is a big-endian machine");
-  size_t floats = 0;
-  for (const DecodedFrames& primitive : decoded)
-    for (const FrameSequence& clip : primitive.clips) floats += clip.positions.size();
-  std::vector<float> all;
-  all.reserve(floats);
-  for (const DecodedFrames& primitive : decoded)
-    for (const FrameSequence& clip : primitive.clips) all.insert(all.end(), clip.positions.begin(), clip.positions.end());
-  return save_file(path, all.data(), all.size() * sizeof(float));
 }
 
 int run_decode(const Options& options) {
   const std::string& path = options.inputs[0];
-  tinygltf::Model model;
-  std::vector<std::string> warnings;
-  progress(options, "reading " + path);
-  Status status = load_gltf(path, model, &warnings);
-  DecodedSizes sizes;
+  Model model;
+  DecodeReport report;
   std::vector<DecodedFrames> decoded;
-  if (status.ok()) status = decode_compressed_model(model, &sizes, options.frames.empty() ? nullptr : &decoded);
+  Status status = load(path, options, model);
+  if (status.ok()) status = decode(model, &report, options.frames.empty() ? nullptr : &decoded);
   if (!status.ok()) return fail(path, status);
-  if (sizes.primitives == 0 && sizes.coded_animations == 0)
+  if (report.primitives == 0 && report.coded_animations == 0)
     return fail(path, Status(StatusCode::nothing_to_do,
                              "not encoded: it has no SEGMORPH_animation_compression primitive or animation"));
   if (!options.output.empty()) {
     progress(options, "writing " + options.output);
-    status = save_gltf(model, options.output);
+    status = model.save(options.output);
     if (!status.ok()) return fail(options.output, status);
   }
   if (!options.frames.empty()) {
     progress(options, "writing the decoded frames to " + options.frames);
-    status = save_frames(decoded, options.frames);
+    status = save_decoded_frames(decoded, options.frames);
     if (!status.ok()) return fail(options.frames, status);
   }
-  progress(options, "decoded " + std::to_string(sizes.primitives) + " primitive" + (sizes.primitives == 1 ? "" : "s") +
-                        " and the tracks of " + std::to_string(sizes.coded_animations) + " animation" +
-                        (sizes.coded_animations == 1 ? "" : "s"));
+  progress(options, "decoded " + std::to_string(report.primitives) + " primitive" + (report.primitives == 1 ? "" : "s") +
+                        " and the tracks of " + std::to_string(report.coded_animations) + " animation" +
+                        (report.coded_animations == 1 ? "" : "s"));
   return 0;
 }
 
 int run_verify(const Options& options) {
-  SampledFile original, compressed;
-  Status status = load_and_sample(options.inputs[0], options, original);
-  if (!status.ok()) return fail(options.inputs[0], status);
-  status = load_and_analyze(options.inputs[1], options, compressed);
-  AnimationComparison comparison;
-  if (status.ok()) {
-    progress(options, "comparing at the frame times of " + options.inputs[0]);
-    status = compare_animation(original.model, original.scene, original.sampled, compressed.model, compressed.scene,
-                               comparison);
+  const std::string &original_path = options.inputs[0], &compressed_path = options.inputs[1];
+  Model original, compressed;
+  Status status = load(original_path, options, original);
+  if (!status.ok()) return fail(original_path, status);
+  status = load(compressed_path, options, compressed);
+  if (!status.ok()) return fail(compressed_path, status);
+  VerifyReport report;
+  status = verify(original, compressed, options.sampling, report, progress_of(options));
+  if (!status.ok()) {
+    // Which file is at fault: the original when it cannot be sampled alone.
+    InfoReport alone;
+    const Status original_status = info(original, options.sampling, alone);
+    return original_status.ok() ? fail(compressed_path, status) : fail(original_path, original_status);
   }
-  if (!status.ok()) return fail(options.inputs[1], status);
-
-  const ErrorMetrics& worst = comparison.worst;
-  const double vertex_frames = comparison.vertex_frames;
-  const size_t bytes = file_bytes(options.inputs[1], compressed.model);
+  const size_t bytes = file_bytes(compressed_path, compressed);
+  const double vertex_frames = report.vertex_frames;
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
-  const double bpvf_animation =
-      vertex_frames > 0 ? 8.0 * double(compressed.decoded.animation_bytes) / vertex_frames : 0;
+  const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0;
   if (options.json) {
     std::printf(
         "{\"original\":%s,\"compressed\":%s,\"vertices\":%zu,\"frames\":%zu,\"vertex_frames\":%.0f,"
         "\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,\"rmse_over_diag\":%.6g,"
         "\"max_error_over_diag\":%.6g}\n",
-        json_string(options.inputs[0]).c_str(), json_string(options.inputs[1]).c_str(), comparison.vertices,
-        comparison.frames, vertex_frames, bytes, bpvf, bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal,
-        worst.max_error_over_diagonal);
+        json_string(original_path).c_str(), json_string(compressed_path).c_str(), report.vertices, report.frames,
+        vertex_frames, bytes, bpvf, bpvf_animation, report.kg_percent, report.rmse_over_diagonal,
+        report.max_error_over_diagonal);
   } else {
     std::printf(
         "%s against %s: %zu vertices, %zu frames, %zu bytes, %.3f bpvf (animation %.3f), KG %.4f %%, "
         "RMSE %.3g and max error %.3g of the diagonal\n",
-        options.inputs[1].c_str(), options.inputs[0].c_str(), comparison.vertices, comparison.frames, bytes, bpvf,
-        bpvf_animation, worst.kg_percent, worst.rmse_over_diagonal, worst.max_error_over_diagonal);
+        compressed_path.c_str(), original_path.c_str(), report.vertices, report.frames, bytes, bpvf, bpvf_animation,
+        report.kg_percent, report.rmse_over_diagonal, report.max_error_over_diagonal);
   }
   return 0;
 }
 
 int run(int argc, char** argv) {
   Options options;
-  options.draco.position_bits = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto value = [&](std::string& out) {
@@ -667,14 +346,14 @@ int run(int argc, char** argv) {
         return usage_error(arg + " takes a positive number, not '" + text + "'");
       if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
       options.rate_given = true;
-      options.codec.mode = arg == "--error" ? RateMode::error : RateMode::bpvf;
-      options.codec.target = number;
+      options.encode.mode = arg == "--error" ? RateMode::error : RateMode::bpvf;
+      options.encode.target = number;
     } else if (arg == "--lossless") {
       if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
       options.rate_given = true;
-      options.codec.mode = RateMode::lossless;
+      options.encode.mode = RateMode::lossless;
     } else if (arg == "--fast-decode") {
-      options.codec.table_residuals = true;
+      options.encode.fast_decode = true;
     } else if (arg == "--clusters" || arg == "--position-bits" || arg == "--normal-bits" || arg == "--texcoord-bits") {
       const bool clusters = arg == "--clusters";
       long low = 4, high = 30;  // --texcoord-bits
@@ -691,31 +370,31 @@ int run(int argc, char** argv) {
         return usage_error(arg + " takes a whole number from " + std::to_string(low) + " to " + std::to_string(high) +
                            ", not '" + text + "'");
       if (clusters)
-        options.codec.clusters = size_t(number);
+        options.encode.clusters = size_t(number);
       else if (arg == "--position-bits")
-        options.draco.position_bits = int(number);
+        options.encode.position_bits = int(number);
       else if (arg == "--normal-bits")
-        options.draco.normal_bits = int(number);
+        options.encode.normal_bits = int(number);
       else
-        options.draco.texcoord_bits = int(number);
+        options.encode.texcoord_bits = int(number);
     } else if (arg == "--skins") {
       std::string text;
       if (!value(text)) return usage_error("--skins needs keep or bake");
       if (text == "keep")
-        options.skins = Options::Skins::keep;
+        options.encode.skins = EncodeSettings::Skins::keep;
       else if (text == "bake")
-        options.skins = Options::Skins::bake;
+        options.encode.skins = EncodeSettings::Skins::bake;
       else
         return usage_error("--skins takes keep or bake, not '" + text + "'");
     } else if (arg == "--targets") {
       std::string text;
       if (!value(text)) return usage_error("--targets needs auto, keep or bake");
       if (text == "auto")
-        options.targets = Options::Targets::automatic;
+        options.encode.targets = EncodeSettings::Targets::automatic;
       else if (text == "keep")
-        options.targets = Options::Targets::keep;
+        options.encode.targets = EncodeSettings::Targets::keep;
       else if (text == "bake")
-        options.targets = Options::Targets::bake;
+        options.encode.targets = EncodeSettings::Targets::bake;
       else
         return usage_error("--targets takes auto, keep or bake, not '" + text + "'");
     } else if (arg == "--json") {
@@ -751,9 +430,10 @@ int run(int argc, char** argv) {
     const bool frames_only = options.command == "decode" && !options.frames.empty() && options.output.empty();
     if (options.output.empty() && !frames_only) return usage_error(options.command + " needs -o OUT");
     if (!frames_only && !has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
-    if (options.targets == Options::Targets::keep && options.codec.mode == RateMode::lossless)
+    options.encode.sampling = options.sampling;
+    if (options.encode.targets == EncodeSettings::Targets::keep && options.encode.mode == RateMode::lossless)
       return usage_error("--targets keep is lossy: it cannot be combined with --lossless");
-    if (options.codec.table_residuals && options.codec.mode == RateMode::lossless)
+    if (options.encode.fast_decode && options.encode.mode == RateMode::lossless)
       return usage_error("--fast-decode codes lossy residuals: it cannot be combined with --lossless");
     return options.command == "encode" ? run_encode(options) : run_decode(options);
   }

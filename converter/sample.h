@@ -9,6 +9,7 @@
 
 #include "animation.h"
 #include "frame_sequence.h"
+#include "segmorph/segmorph.h"  // SampleSettings
 #include "segmorph/status.h"
 
 namespace segmorph {
@@ -38,14 +39,6 @@ std::string node_name(const tinygltf::Model& model, int node);
 
 // Reads the animations and finds the animated nodes. Fails with nothing_to_do when nothing moves vertices.
 Status analyze_scene(const tinygltf::Model& model, Scene& scene);
-
-struct SampleSettings {
-  // Frames per second of a regular grid; 0 selects the default: the union of the clip's key times
-  // when there are at most kMaxKeyRate of them per second, else a regular kDefaultFps grid.
-  double fps = 0;
-  static constexpr double kMaxKeyRate = 60;
-  static constexpr double kDefaultFps = 30;
-};
 
 // One primitive of an animated node, sampled over every clip that moves the node.
 struct SampledPrimitive {

@@ -296,7 +296,7 @@ TEST(CodecSequences, CowMeetsThePapersSegmentationErrorAndTheErrorTargets) {
     settings.target = target;
     const Encoded encoded = encode(clips, base, settings);
     EXPECT_LE(encoded.report.e_pi, 0.0016);
-    EXPECT_LE(encoded.report.e_pi, encoded.report.e_pi_before_refinement);
+    EXPECT_LE(encoded.report.e_pi, encoded.report.e_pi_morse);
     EXPECT_LE(kg(clips, encoded.reconstruction), target);
   }
 }

@@ -127,7 +127,7 @@ inline double kg(const std::vector<FrameSequence>& original, const std::vector<F
 // An encode that is expected to succeed: the stream, the encoder's report and its own reconstruction.
 struct Encoded {
   std::vector<uint8_t> stream;
-  EncodeReport report;
+  StreamReport report;
   std::vector<FrameSequence> reconstruction;
 };
 

@@ -1,0 +1,286 @@
+// The whole-file encode (segmorph::encode, include/segmorph/segmorph.h): which meshes keep their morph targets or their
+// skins and which are baked into frames, the kept skins' track precision search, the second pass of a bpvf target,
+// and with targets automatic the choice between kept and baked targets.
+#include "encode.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "bake.h"
+#include "comparison.h"
+#include "gltf_io.h"
+#include "moving_meshes.h"
+#include "tracks.h"
+
+namespace segmorph {
+namespace {
+
+// Whether encode keeps the morph targets of `node` (see --targets): an unskinned morph mesh that only this node
+// uses, in a lossy encode, with at most half as many targets as frames unless asked to keep them.
+bool keeps_targets(const tinygltf::Model& model, const AnimatedNode& node, const SampledNode& sampled,
+                   const EncodeSettings& settings) {
+  if (settings.targets == EncodeSettings::Targets::bake || settings.mode == RateMode::lossless) return false;
+  if (!node.morphed || node.skin >= 0) return false;
+  size_t users = 0;
+  for (const tinygltf::Node& other : model.nodes) users += other.mesh == node.mesh;
+  if (users != 1) return false;
+  if (settings.targets == EncodeSettings::Targets::keep) return true;
+  size_t frames = 0;
+  for (const FrameSequence& clip : sampled.primitives[0].clips) frames += clip.frame_count;
+  return 2 * sampled.primitives[0].target_deltas.size() <= frames;
+}
+
+struct Encoded {
+  tinygltf::Model model;
+  CompressReport report;
+  double kept_skins_floor = 0;  // when kept skins cannot reach the --error target: the KG % they stay at
+};
+
+// What encode_model_once does with the settings: the codec's and Draco's, whether kept skins stay kept.
+struct EncodeChoices {
+  CodecSettings codec;
+  DracoSettings draco;
+  bool keep_skins = true;
+};
+
+// A --bpvf result within this factor of its target meets it (the codec aims a little below).
+constexpr double kBpvfTolerance = 1.05;
+
+// Bits per vertex per frame are counted over Σ V × F of the sampled primitives and clips.
+double vertex_frames(const std::vector<SampledNode>& sampled) {
+  double total = 0;
+  for (const SampledNode& node : sampled)
+    for (const SampledPrimitive& primitive : node.primitives)
+      for (const FrameSequence& clip : primitive.clips) total += double(clip.vertex_count) * double(clip.frame_count);
+  return total;
+}
+
+// Whether encode keeps the skin of `node` (see --skins): a skinned mesh without morph targets, with an error
+// target (a kept skin's error is searched for; --bpvf rate control and --lossless are the codec's, on baked frames).
+bool keeps_skin(const AnimatedNode& node, const EncodeChoices& choices) {
+  return choices.keep_skins && choices.codec.mode == RateMode::error && node.skin >= 0 && !node.morphed;
+}
+
+// Draco's share of the KG error target in the meshes compress_moving_meshes takes.
+constexpr double kMovingMeshErrorShare = 0.6;
+// The tracks' quantization distance (TrackPrecision) where nothing measured depends on it: this fraction of the
+// error target times the scene's diagonal, about what the search below settles on for kept skins.
+constexpr double kTrackDistanceRatio = 0.25;
+// The search for kept skins: KG within kSearchGoal of the target; a bracket in at most kSearchBracketRounds
+// doublings or halvings, then kSearchHalvings bisections of it (in log distance).
+constexpr double kSearchGoal = 0.99;
+constexpr int kSearchBracketRounds = 8, kSearchHalvings = 4;
+
+// The KG error target (%) the meshes and tracks outside the codec aim at: --error's, else the default one.
+double error_target(const CodecSettings& codec) {
+  return codec.mode == RateMode::error ? codec.target : CodecSettings().target;
+}
+
+// The worst KG error (%) of `encoded` against the file it was encoded from, as verify measures it.
+Status measured_kg(const SampledFile& file, tinygltf::Model encoded, double& kg) {
+  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(encoded));
+  Scene scene;
+  SEGMORPH_RETURN_IF_ERROR(analyze_scene(encoded, scene));
+  AnimationComparison comparison;
+  SEGMORPH_RETURN_IF_ERROR(compare_animation(file.model, file.scene, file.sampled, encoded, scene, comparison));
+  kg = comparison.worst.kg_percent;
+  return Status::Ok();
+}
+
+// Codes the tracks of `out.model` (whose kept skins depend on them): with --error, the coarsest quantization
+// distance (a factor of 2 apart, then halved 4 times) whose measured KG is within the target; otherwise the rule
+// of kTrackDistanceRatio.
+Status encode_tracks_for(const SampledFile& file, const CodecSettings& codec, bool measured, Encoded& out) {
+  const double first = kTrackDistanceRatio * error_target(codec) / 100 * scene_diagonal(out.model);
+  auto encode = [&](double distance, Encoded& result, TrackReport& report) {
+    result.model = out.model;
+    report = TrackReport();
+    return compress_tracks(result.model, TrackPrecision{distance}, report);
+  };
+  TrackReport report;
+  if (!measured || codec.mode != RateMode::error) {
+    SEGMORPH_RETURN_IF_ERROR(encode(first, out, report));
+    out.report.animation_bytes += report.bytes;
+    return Status::Ok();
+  }
+  const double goal = kSearchGoal * codec.target;
+  Encoded candidate;
+  double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
+  auto within_goal = [&](double distance, bool& ok) {
+    SEGMORPH_RETURN_IF_ERROR(encode(distance, candidate, report));
+    SEGMORPH_RETURN_IF_ERROR(measured_kg(file, candidate.model, kg));
+    ok = kg <= goal;
+    return Status::Ok();
+  };
+  bool ok = false;
+  double distance = first;
+  for (int round = 0; round < kSearchBracketRounds; ++round) {
+    SEGMORPH_RETURN_IF_ERROR(within_goal(distance, ok));
+    (ok ? within : beyond) = distance;
+    if (within > 0 && beyond > 0) break;
+    distance = ok ? distance * 2 : distance / 2;
+  }
+  if (within == 0) {  // the error is not the tracks' (a kept skin's weights are bytes): the caller bakes instead
+    out.kept_skins_floor = kg;
+    return Status::Ok();
+  }
+  for (int round = 0; beyond > 0 && round < kSearchHalvings; ++round) {
+    distance = std::sqrt(within * beyond);
+    SEGMORPH_RETURN_IF_ERROR(within_goal(distance, ok));
+    (ok ? within : beyond) = distance;
+  }
+  SEGMORPH_RETURN_IF_ERROR(encode(within, out, report));
+  out.report.animation_bytes += report.bytes;
+  return Status::Ok();
+}
+
+// Encodes a copy of file's model with `codec`: the nodes `keep` marks keep their morph targets, skinned nodes whose
+// skin is kept are compressed with the meshes that move rigidly, the others are baked; then the tracks are coded.
+Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep, const CodecSettings& codec,
+                         const EncodeChoices& choices, const Progress& progress, Encoded& out) {
+  out.model = file.model;
+  out.report = CompressReport();
+  out.kept_skins_floor = 0;
+  std::vector<SampledNode> kept, baked;
+  std::vector<int> kept_skins;
+  for (size_t i = 0; i < file.sampled.size(); ++i) {
+    if (keeps_skin(*file.sampled[i].node, choices))
+      kept_skins.push_back(file.sampled[i].node->node);
+    else
+      (keep[i] ? kept : baked).push_back(file.sampled[i]);
+  }
+  const auto say = [&](const std::string& message) { report_progress(progress, message); };
+  SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, codec, choices.draco, out.report, say));
+  SEGMORPH_RETURN_IF_ERROR(bake_model(out.model, file.scene, baked));
+  SEGMORPH_RETURN_IF_ERROR(compress_model(out.model, baked, codec, choices.draco, out.report, say));
+  if (codec.mode == RateMode::lossless) return Status::Ok();
+  // Draco's RMS error is half its step: a step of 2 × share × E / 100 of a mesh's spread is its share of KG E %.
+  const double step_ratio = 2 * kMovingMeshErrorShare * error_target(codec) / 100;
+  MovingMeshReport meshes;
+  // A rigid part's error counts against the whole it belongs to: a figure's spread is about a quarter of its
+  // diagonal.
+  const double rigid_spread = scene_diagonal(out.model) / 4;
+  SEGMORPH_RETURN_IF_ERROR(compress_moving_meshes(out.model, moving_meshes(out.model, kept_skins), choices.draco,
+                                                  step_ratio, rigid_spread, meshes));
+  out.report.draco_bytes += meshes.bytes;
+  say(kept_skins.empty() ? "coding the animation tracks" : "coding the animation tracks, measuring the kept skins' error");
+  return encode_tracks_for(file, codec, !kept_skins.empty(), out);
+}
+
+// encode_model_once, and with --bpvf a second time: the rate is of the whole file, and the codec budgets only its
+// streams and base meshes, so the rest (JSON, images, other meshes and animations, kept weights), measured on the
+// first encode, comes off the codec's target.
+Status encode_model(const SampledFile& file, const std::vector<bool>& keep, const EncodeChoices& choices,
+                    const Progress& progress, Encoded& out) {
+  const CodecSettings& target = choices.codec;
+  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, target, choices, progress, out));
+  if (out.kept_skins_floor > 0) {
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "kept skins stay at KG %.4f %% even with the finest tracks, above --error %g (their weights are "
+                  "bytes): baking them instead",
+                  out.kept_skins_floor, target.target);
+    report_progress(progress, line);
+    EncodeChoices baked = choices;
+    baked.keep_skins = false;
+    const double floor = out.kept_skins_floor;
+    SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, target, baked, progress, out));
+    out.kept_skins_floor = floor;
+  }
+  if (target.mode != RateMode::bpvf) return Status::Ok();
+  const double frames = vertex_frames(file.sampled);
+  const size_t coded = out.report.draco_bytes + out.report.animation_bytes, whole = glb_size(out.model);
+  const double rest = 8.0 * double(whole > coded ? whole - coded : 0) / frames;
+  char figures[200];
+  std::snprintf(figures, sizeof(figures), "%.3f bpvf, of which %.3f outside the animation streams and base meshes",
+                8.0 * double(whole) / frames, rest);
+  if (rest >= target.target) {
+    char rate[32];
+    std::snprintf(rate, sizeof(rate), "%g", target.target);
+    return Status(StatusCode::invalid_argument, std::string("--bpvf ") + rate +
+                                                    " is below what the rest of the file takes alone: the first "
+                                                    "encode came to " +
+                                                    figures);
+  }
+  report_progress(progress, std::string("first encode: ") + figures + "; encoding again for the whole file's rate");
+  CodecSettings codec = target;
+  codec.target -= rest;
+  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, codec, choices, progress, out));
+  const double reached = 8.0 * double(glb_size(out.model)) / frames;
+  if (reached > kBpvfTolerance * target.target) {
+    char line[200];
+    std::snprintf(line, sizeof(line), "warning: --bpvf %g is out of reach for this file: it comes to %.3f bpvf",
+                  target.target, reached);
+    report_progress(progress, line);
+  }
+  return Status::Ok();
+}
+
+// The worst KG error (%) the encoder reports over the encoded primitives.
+double worst_kg(const CompressReport& report) {
+  double worst = 0;
+  for (const StreamReport& primitive : report.primitives) worst = std::max(worst, primitive.kg_percent);
+  return worst;
+}
+
+}  // namespace
+
+Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, tinygltf::Model& output,
+                      EncodeReport& report, const Progress& progress) {
+  EncodeChoices choices;
+  choices.codec.mode = settings.mode;
+  choices.codec.target = settings.target;
+  choices.codec.clusters = settings.clusters;
+  choices.codec.table_residuals = settings.fast_decode;
+  choices.draco.position_bits = settings.position_bits;
+  choices.draco.normal_bits = settings.normal_bits;
+  choices.draco.texcoord_bits = settings.texcoord_bits;
+  choices.keep_skins = settings.skins == EncodeSettings::Skins::keep;
+  // Morph-target meshes that keep their targets are compressed where they are; the others are baked first. With
+  // --targets auto, a file where some mesh could keep them is encoded both ways; the smaller file is kept (with
+  // --bpvf, where both come to the target's size, the one with the smaller worst error).
+  std::vector<bool> keep(file.sampled.size());
+  bool any_kept = false;
+  for (size_t i = 0; i < file.sampled.size(); ++i)
+    any_kept |= keep[i] = keeps_targets(file.model, *file.sampled[i].node, file.sampled[i], settings);
+  Encoded encoded;
+  Status status = encode_model(file, keep, choices, progress, encoded);
+  if (any_kept && settings.targets == EncodeSettings::Targets::automatic) {
+    // Either variant may be refused (a --bpvf target below what its rest takes); the other then stands alone.
+    Encoded baked;
+    report_progress(progress, "encoding again with the morph targets baked, to compare");
+    const Status baked_status = encode_model(file, std::vector<bool>(keep.size(), false), choices, progress, baked);
+    if (!status.ok() && baked_status.ok()) {
+      report_progress(progress, "keeping the morph targets was refused (" + status.message() + "); the baked file stands");
+      encoded = std::move(baked), status = baked_status;
+    } else if (status.ok() && baked_status.ok()) {
+      const size_t kept_size = glb_size(encoded.model), baked_size = glb_size(baked.model);
+      const double kept_kg = worst_kg(encoded.report), baked_kg = worst_kg(baked.report);
+      char line[160];
+      std::snprintf(line, sizeof(line), "morph targets kept: %zu bytes, KG %.4f %%; baked: %zu bytes, KG %.4f %%",
+                    kept_size, kept_kg, baked_size, baked_kg);
+      report_progress(progress, line);
+      // With --bpvf: the smaller error among the files within the target, else the smaller file.
+      const double budget = kBpvfTolerance * settings.target * vertex_frames(file.sampled) / 8;
+      const bool kept_fits = double(kept_size) <= budget, baked_fits = double(baked_size) <= budget;
+      const bool take_baked = settings.mode != RateMode::bpvf ? baked_size < kept_size
+                              : kept_fits != baked_fits       ? baked_fits
+                              : kept_fits                     ? baked_kg < kept_kg
+                                                              : baked_size < kept_size;
+      if (take_baked) encoded = std::move(baked);
+    }
+  }
+  SEGMORPH_RETURN_IF_ERROR(status);
+  output = std::move(encoded.model);
+  report = EncodeReport();
+  report.streams = std::move(encoded.report.primitives);
+  report.draco_bytes = encoded.report.draco_bytes;
+  report.animation_bytes = encoded.report.animation_bytes;
+  report.ms_draco = encoded.report.ms_draco;
+  report.kept_skins_floor = encoded.kept_skins_floor;
+  report.vertex_frames = vertex_frames(file.sampled);
+  return Status::Ok();
+}
+
+}  // namespace segmorph

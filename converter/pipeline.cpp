@@ -1,0 +1,177 @@
+// The pipeline API (include/segmorph/segmorph.h): segmorph::Model around tinygltf's, and info, bake, encode, decode
+// and verify over the converter's stages.
+#include "pipeline.h"
+
+#include <cstdio>
+#include <cstring>
+
+#include "bake.h"
+#include "comparison.h"
+#include "encode.h"
+#include "gltf_io.h"
+#include "topology.h"
+
+namespace segmorph {
+
+Model::Model() : data_(std::make_unique<Data>()) {}
+Model::~Model() = default;
+Model::Model(const Model& other) : data_(std::make_unique<Data>(*other.data_)) {}
+Model& Model::operator=(const Model& other) {
+  if (this != &other) *data_ = *other.data_;
+  return *this;
+}
+Model::Model(Model&& other) noexcept : data_(std::move(other.data_)) { other.data_ = std::make_unique<Data>(); }
+Model& Model::operator=(Model&& other) noexcept {
+  std::swap(data_, other.data_);
+  return *this;
+}
+
+Status Model::load(const std::string& path, Model& model, std::vector<std::string>* warnings) {
+  model = Model();
+  return load_gltf(path, model.data().gltf, warnings);
+}
+
+Status Model::save(const std::string& path) { return save_gltf(data_->gltf, path); }
+
+size_t Model::glb_size() const { return segmorph::glb_size(data_->gltf); }
+
+size_t file_bytes(const std::string& path, const Model& model) {
+  auto size_of = [](const std::string& file) -> size_t {
+    std::FILE* handle = std::fopen(file.c_str(), "rb");
+    if (!handle) return 0;
+    std::fseek(handle, 0, SEEK_END);
+    const long size = std::ftell(handle);
+    std::fclose(handle);
+    return size > 0 ? size_t(size) : 0;
+  };
+  size_t total = size_of(path);
+  const size_t slash = path.find_last_of('/');
+  const std::string directory = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+  for (const tinygltf::Buffer& buffer : model.data().gltf.buffers)
+    if (!buffer.uri.empty() && buffer.uri.rfind("data:", 0) != 0) total += size_of(directory + buffer.uri);
+  for (const tinygltf::Image& image : model.data().gltf.images)
+    if (!image.uri.empty() && image.uri.rfind("data:", 0) != 0) total += size_of(directory + image.uri);
+  return total;
+}
+
+Status analyze_model(const tinygltf::Model& model, const SampleSettings& settings, bool sample,
+                     const Progress& progress, SampledFile& file) {
+  file.model = model;
+  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(file.model, &file.decoded));
+  SEGMORPH_RETURN_IF_ERROR(analyze_scene(file.model, file.scene));
+  if (!sample) return Status::Ok();
+  const Scene& scene = file.scene;
+  file.sampled.resize(scene.animated.size());
+  for (size_t i = 0; i < scene.animated.size(); ++i) {
+    const AnimatedNode& node = scene.animated[i];
+    report_progress(progress, "sampling " + node_name(file.model, node.node) + " (" + std::to_string(i + 1) + "/" +
+                                  std::to_string(scene.animated.size()) + "), " + std::to_string(node.clips.size()) +
+                                  " clip" + (node.clips.size() == 1 ? "" : "s"));
+    SEGMORPH_RETURN_IF_ERROR(sample_node(file.model, scene, node, settings, file.sampled[i]));
+  }
+  return Status::Ok();
+}
+
+Status info(const Model& model, const SampleSettings& settings, InfoReport& report, const Progress& progress) {
+  SampledFile file;
+  SEGMORPH_RETURN_IF_ERROR(analyze_model(model.data().gltf, settings, true, progress, file));
+  report = InfoReport();
+  report.animations = file.model.animations.size();
+  for (const SampledNode& node : file.sampled) {
+    const AnimatedNode& animated = *node.node;
+    for (const SampledPrimitive& primitive : node.primitives) {
+      const FrameSequence& first = primitive.clips[0];
+      const WeldedTopology topology = weld_topology(primitive.clips);
+      PrimitiveInfo out;
+      out.node = animated.node;
+      out.node_name = file.model.nodes[size_t(animated.node)].name;
+      out.mesh = animated.mesh;
+      out.primitive = primitive.primitive;
+      out.kind = animated.kind();
+      out.vertices = first.vertex_count;
+      out.triangles = first.triangle_count();
+      out.welded_vertices = topology.welded_count();
+      out.connected_components = topology.component_count;
+      for (size_t c = 0; c < primitive.clips.size(); ++c) {
+        const FrameSequence& clip = primitive.clips[c];
+        const Clip& source = file.scene.clips[size_t(animated.clips[c])];
+        out.clips.push_back({source.animation, source.name, clip.frame_count,
+                             double(clip.times.back()) - double(clip.times.front()),
+                             clip.frame_count * clip.vertex_count * 3 * sizeof(float)});
+      }
+      report.primitives.push_back(std::move(out));
+    }
+  }
+  return Status::Ok();
+}
+
+Status bake(Model& model, const SampleSettings& settings, BakeReport* report, const Progress& progress) {
+  SampledFile file;
+  SEGMORPH_RETURN_IF_ERROR(analyze_model(model.data().gltf, settings, true, progress, file));
+  SEGMORPH_RETURN_IF_ERROR(bake_model(file.model, file.scene, file.sampled));
+  if (report) {
+    *report = BakeReport();
+    report->nodes = file.sampled.size();
+    for (const SampledNode& node : file.sampled)
+      for (const FrameSequence& clip : node.primitives[0].clips) report->frames += clip.frame_count;
+  }
+  model.data().gltf = std::move(file.model);
+  return Status::Ok();
+}
+
+Status encode(const Model& input, const EncodeSettings& settings, Model& output, EncodeReport* report,
+              const Progress& progress) {
+  SampledFile file;
+  SEGMORPH_RETURN_IF_ERROR(analyze_model(input.data().gltf, settings.sampling, true, progress, file));
+  EncodeReport local;
+  tinygltf::Model encoded;
+  SEGMORPH_RETURN_IF_ERROR(encode_sampled(file, settings, encoded, report ? *report : local, progress));
+  output.data().gltf = std::move(encoded);
+  return Status::Ok();
+}
+
+Status decode(Model& model, DecodeReport* report, std::vector<DecodedFrames>* frames) {
+  DecodedSizes sizes;
+  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(model.data().gltf, &sizes, frames));
+  if (report) *report = {sizes.animation_bytes, sizes.primitives, sizes.coded_animations};
+  return Status::Ok();
+}
+
+Status save_decoded_frames(const std::vector<DecodedFrames>& frames, const std::string& path) {
+  static_assert(sizeof(float) == 4, "binary32 floats");
+  const uint16_t probe = 1;
+  uint8_t first;
+  std::memcpy(&first, &probe, 1);
+  if (first != 1) return Status(StatusCode::unsupported, "raw frames are little-endian floats: this is a big-endian machine");
+  size_t floats = 0;
+  for (const DecodedFrames& primitive : frames)
+    for (const DecodedFrames::Clip& clip : primitive.clips) floats += clip.positions.size();
+  std::vector<float> all;
+  all.reserve(floats);
+  for (const DecodedFrames& primitive : frames)
+    for (const DecodedFrames::Clip& clip : primitive.clips)
+      all.insert(all.end(), clip.positions.begin(), clip.positions.end());
+  return save_file(path, all.data(), all.size() * sizeof(float));
+}
+
+Status verify(const Model& original, const Model& compressed, const SampleSettings& settings, VerifyReport& report,
+              const Progress& progress) {
+  SampledFile reference, other;
+  SEGMORPH_RETURN_IF_ERROR(analyze_model(original.data().gltf, settings, true, progress, reference));
+  SEGMORPH_RETURN_IF_ERROR(analyze_model(compressed.data().gltf, settings, false, progress, other));
+  report_progress(progress, "comparing at the frame times of the original");
+  AnimationComparison comparison;
+  SEGMORPH_RETURN_IF_ERROR(compare_animation(reference.model, reference.scene, reference.sampled, other.model,
+                                             other.scene, comparison));
+  report = VerifyReport();
+  report.vertices = comparison.vertices;
+  report.frames = comparison.frames;
+  report.vertex_frames = comparison.vertex_frames;
+  report.kg_percent = comparison.worst.kg_percent;
+  report.rmse_over_diagonal = comparison.worst.rmse_over_diagonal;
+  report.max_error_over_diagonal = comparison.worst.max_error_over_diagonal;
+  report.animation_bytes = other.decoded.animation_bytes;
+  return Status::Ok();
+}
+
+}  // namespace segmorph

@@ -1,0 +1,212 @@
+// segmorph's pipeline API: whole glTF files through info, bake, encode, decode and verify, as the segmorph tool runs
+// them (the tool is argument parsing and printing over these functions). For asset pipelines written in C++: an
+// engine's importer, a DCC exporter, a build tool. Link segmorph::segmorph (find_package(segmorph CONFIG)); tinygltf,
+// Draco, Eigen and Spectra are inside, none of them in this header. docs/library.md has a worked example.
+//
+// Errors come back as a Status (include/segmorph/status.h), never as an exception or a print; progress on long work,
+// when the caller asks for it, as calls of a function it gives. Units: KG error in percent, rates in bits per vertex
+// per frame of the whole file, times in seconds, sizes in bytes.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "segmorph/status.h"
+#include "segmorph/version.h"
+
+namespace segmorph {
+
+// One line of progress on long work ("encoding mesh 1 primitive 0 (2904 vertices)"); empty: no progress.
+using Progress = std::function<void(const std::string& message)>;
+
+// A glTF 2.0 asset in memory: what load() read, what the functions below transform.
+class Model {
+ public:
+  Model();
+  ~Model();
+  Model(const Model& other);
+  Model& operator=(const Model& other);
+  Model(Model&& other) noexcept;
+  Model& operator=(Model&& other) noexcept;
+
+  // Reads a .glb or a .gltf (its buffers and images resolved beside it). `warnings` receives what the loader let
+  // pass. Fails on anything that is not valid enough to process, with a one-line message.
+  static Status load(const std::string& path, Model& model, std::vector<std::string>* warnings = nullptr);
+
+  // Writes `path`: binary if it ends in .glb, JSON with a .bin beside it if it ends in .gltf, whole or not at all.
+  // The data is repacked into one buffer first (the model changes accordingly).
+  Status save(const std::string& path);
+
+  // The bytes save() would write as a .glb (images that are files included as it embeds them).
+  size_t glb_size() const;
+
+  // The implementation's model (tinygltf's), for segmorph's own code.
+  struct Data;
+  Data& data() { return *data_; }
+  const Data& data() const { return *data_; }
+
+ private:
+  std::unique_ptr<Data> data_;
+};
+
+// Bytes of the file at `path` and of the files its buffers and images name (a .gltf's .bin): what a server sends.
+size_t file_bytes(const std::string& path, const Model& model);
+
+// How animation is sampled into frames (docs/baking.md).
+struct SampleSettings {
+  // Frames per second of a regular grid; 0 selects the default: the union of the clip's key times when there are at
+  // most kMaxKeyRate of them per second, else a regular kDefaultFps grid.
+  double fps = 0;
+  static constexpr double kMaxKeyRate = 60;
+  static constexpr double kDefaultFps = 30;
+};
+
+// --- info ---
+
+struct ClipInfo {
+  int animation = -1;  // index in the file's animations
+  std::string name;
+  size_t frames = 0;
+  double duration = 0;     // seconds, first to last frame
+  size_t baked_bytes = 0;  // V × F × 3 floats
+};
+
+struct PrimitiveInfo {
+  int node = -1;
+  std::string node_name;
+  int mesh = -1, primitive = -1;
+  std::string kind;  // "morph", "skinned" or "morph+skinned"
+  size_t vertices = 0, triangles = 0, welded_vertices = 0, connected_components = 0;
+  std::vector<ClipInfo> clips;
+};
+
+struct InfoReport {
+  std::vector<PrimitiveInfo> primitives;  // every animated primitive
+  size_t animations = 0;                  // the file's animations
+};
+
+// The animated primitives of `model` (decoded first when it is encoded) and their clips, as sampled. Fails with
+// nothing_to_do when nothing moves vertices.
+Status info(const Model& model, const SampleSettings& settings, InfoReport& report, const Progress& progress = {});
+
+// --- bake ---
+
+struct BakeReport {
+  size_t nodes = 0;   // animated nodes baked
+  size_t frames = 0;  // frames in all (the first primitive of each node, every clip)
+};
+
+// Replaces every animated primitive of `model` by standard morph targets, one per sampled frame, played by one
+// weights animation per clip (docs/baking.md). An encoded model is decoded first.
+Status bake(Model& model, const SampleSettings& settings, BakeReport* report = nullptr, const Progress& progress = {});
+
+// --- encode ---
+
+enum class RateMode {
+  error,     // target: KG error in percent
+  bpvf,      // target: bits per vertex per frame of the whole output
+  lossless,  // restore the input floats bit for bit
+};
+
+struct EncodeSettings {
+  RateMode mode = RateMode::error;
+  double target = 0.15;  // KG % (error) or bits per vertex per frame of the whole file (bpvf)
+  SampleSettings sampling;
+  size_t clusters = 0;     // motion clusters K; 0 chooses automatically
+  int position_bits = 0;   // Draco position bits of the base meshes, 8 to 22; 0 chooses from the error target
+  int normal_bits = 8;     // 4 to 16
+  int texcoord_bits = 12;  // 4 to 30
+  // What a skinned mesh without morph targets stores: its skin (kept, with coded tracks) or its sampled frames.
+  // bpvf and lossless encodes bake; so does keep where a kept skin cannot reach the error target.
+  enum class Skins { keep, bake } skins = Skins::keep;
+  // What a morph-target mesh (unskinned, one node) stores: its targets or its frames; automatic encodes both ways
+  // where it has at most half as many targets as frames and keeps the smaller file. Lossless encodes bake.
+  enum class Targets { automatic, keep, bake } targets = Targets::automatic;
+  // The residuals in the table code of stream version 2: faster decoding, larger files. Lossy encodes only.
+  bool fast_decode = false;
+};
+
+// One animation stream of a primitive coded as frames or kept targets, as the codec made it.
+struct StreamReport {
+  size_t clusters = 0;      // K
+  double e_pi_morse = 0;    // E(Π) of the Morse segmentation before merging to K and refinement (paper, Table 2)
+  double e_pi = 0;          // E(Π) of the final clusters
+  int refinement_iterations = 0;
+  double residual_steps[3] = {0, 0, 0};
+  double kg_percent = 0;  // of the encoder's own reconstruction (of the animation it plays, for kept targets)
+  size_t bytes_motion = 0, bytes_residuals = 0, bytes_total = 0;
+  // Milliseconds per stage.
+  double ms_segmentation = 0, ms_motion = 0, ms_prediction = 0, ms_rate_control = 0, ms_entropy = 0;
+};
+
+struct EncodeReport {
+  std::vector<StreamReport> streams;  // one per primitive coded as frames or kept targets
+  double vertex_frames = 0;           // Σ V × F over the input's animated primitives and clips (what bpvf counts)
+  size_t draco_bytes = 0;             // base meshes, kept skins and moving meshes
+  size_t animation_bytes = 0;         // animation and track streams
+  double ms_draco = 0;
+  double kept_skins_floor = 0;  // > 0: kept skins stayed at this KG % above the target, and were baked instead
+};
+
+// Encodes `input` (which may be any glTF with animation) into `output`: every animated primitive's first frame with
+// KHR_draco_mesh_compression, its animation as a SEGMORPH_animation_compression stream, kept skins and moving meshes
+// with Draco and their tracks coded. Fails with invalid_argument when the settings cannot be met (a bpvf target
+// below what the rest of the file takes alone).
+Status encode(const Model& input, const EncodeSettings& settings, Model& output, EncodeReport* report = nullptr,
+              const Progress& progress = {});
+
+// --- decode ---
+
+struct DecodeReport {
+  size_t animation_bytes = 0;   // SEGMORPH streams read
+  size_t primitives = 0;        // compressed primitives decoded
+  size_t coded_animations = 0;  // animations whose tracks were coded
+};
+
+// What a compressed primitive's stream decoded to: for one that plays clips, its clips' frames (positions, V × 3 per
+// frame); for one that keeps its morph targets, one clip whose T frames are the targets' POSITION displacements.
+struct DecodedFrames {
+  int mesh = -1, primitive = -1;
+  bool targets = false;
+  struct Clip {
+    size_t vertex_count = 0, frame_count = 0;
+    std::vector<float> positions;  // frame_count × vertex_count × 3
+  };
+  std::vector<Clip> clips;
+};
+
+// Restores standard glTF in place: morph targets in the form bake writes, kept morph targets, kept skins, plain
+// meshes and float tracks (through the runtime decoder, include/segmorph/decoder.h). `frames`, when given, receives
+// what every compressed primitive's stream decoded to, in the order of meshes and primitives. A model that is not
+// encoded is left as it is (report->primitives and coded_animations 0).
+Status decode(Model& model, DecodeReport* report = nullptr, std::vector<DecodedFrames>* frames = nullptr);
+
+// Writes decoded frames to `path` as raw little-endian float32, primitive after primitive, clip after clip, frame after
+// frame (the layout of `segmorph decode --frames` and examples/engine_decode), whole or not at all.
+Status save_decoded_frames(const std::vector<DecodedFrames>& frames, const std::string& path);
+
+// True when `path` ends in .glb or .gltf (case-insensitive): a name save() takes.
+bool has_gltf_extension(const std::string& path);
+
+// --- verify ---
+
+struct VerifyReport {
+  size_t vertices = 0;       // V of the original, over its animated primitives
+  size_t frames = 0;         // F of its first animated primitive, over its clips
+  double vertex_frames = 0;  // Σ V × F over its animated primitives and clips
+  // The worst animated primitive's errors: KG in percent; RMSE and largest error over the bounding-box diagonal.
+  double kg_percent = 0, rmse_over_diagonal = 0, max_error_over_diagonal = 0;
+  size_t animation_bytes = 0;  // the compressed file's SEGMORPH streams
+};
+
+// Compares the animation of `compressed` with that of `original` (either may be encoded, baked, original or written
+// by another tool: primitives and vertices are paired by trajectory, `compressed` is sampled at `original`'s frame
+// times). A failed Status is about `compressed`, unless it is original's sampling that failed.
+Status verify(const Model& original, const Model& compressed, const SampleSettings& settings, VerifyReport& report,
+              const Progress& progress = {});
+
+}  // namespace segmorph
