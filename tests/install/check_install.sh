@@ -6,7 +6,9 @@
 #   2. examples/engine_decode built from outside the source tree against each installed package, as an engine would
 #      build it (find_package(segmorph CONFIG)), and a C99 program built with pkg-config's flags;
 #   3. every bundled sample and every shared sample and sequence encoded by the installed tool in several modes; the
-#      example's frames (tinygltf, Draco and the C API) must equal `segmorph decode --frames` bit for bit.
+#      example's frames (tinygltf, Draco and the C API) must equal `segmorph decode --frames` bit for bit;
+#   4. examples/pipeline, built against the installed pipeline API (segmorph::segmorph), encodes, decodes and verifies
+#      every bundled sample and shared sequence: the same bytes as the installed tool, within the error target.
 #
 #   check_install.sh SOURCE_DIR BUILD_DIR WORK_DIR SHARED_SAMPLES_DIR
 set -euo pipefail
@@ -30,6 +32,8 @@ cmake -S "$source_dir" -B "$work/build-shared" "${generator[@]}" -DCMAKE_BUILD_T
   -DBUILD_SHARED_LIBS=ON -DSEGMORPH_WEB=OFF >/dev/null
 cmake --build "$work/build-shared" --parallel "$(nproc)" >/dev/null
 cmake --install "$work/build-shared" --prefix "$work/shared" >/dev/null
+[ -f "$work/static/include/segmorph/segmorph.h" ] && [ -f "$work/static/lib/libsegmorph.a" ] ||
+  fail "the install has no pipeline API (include/segmorph/segmorph.h, lib/libsegmorph.a)"
 for file in include/segmorph/decoder.h include/segmorph/decoder_c.h include/segmorph/status.h \
   include/segmorph/version.h lib/cmake/segmorph/segmorph-config.cmake lib/pkgconfig/segmorph.pc; do
   for kind in static shared; do
@@ -116,3 +120,21 @@ for input in "${inputs[@]}"; do
 done
 [ "$compared" -gt 0 ] && [ "$frames_bytes" -gt 0 ] || fail "nothing was compared"
 echo "check_install: $compared encoded files, $frames_bytes bytes of frames: engine_decode (static and shared) equals segmorph decode --frames bit for bit"
+
+echo "check_install: examples/pipeline against the installed pipeline API"
+cmake -S "$source_dir/examples/pipeline" -B "$work/pipeline" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$work/static" >/dev/null
+cmake --build "$work/pipeline" >/dev/null
+pipelined=0
+for input in "$source_dir"/samples/*/*.glb "$source_dir"/samples/*/*.gltf "$shared_samples"/sequences/*/*.glb; do
+  [ -f "$input" ] || continue
+  name=$(basename "$(dirname "$input")")
+  "$work/pipeline/pipeline" "$input" "$work/$name.pipeline.glb" 2>"$work/pipeline.err" >"$work/pipeline.json" ||
+    fail "examples/pipeline $input: $(tail -1 "$work/pipeline.err") $(cat "$work/pipeline.json")"
+  grep -q '"within_target":true' "$work/pipeline.json" || fail "examples/pipeline $input: $(cat "$work/pipeline.json")"
+  "$segmorph" encode -q "$input" -o "$work/$name.tool.glb" >/dev/null
+  cmp -s "$work/$name.pipeline.glb" "$work/$name.tool.glb" ||
+    fail "examples/pipeline and segmorph encode wrote different bytes for $input"
+  pipelined=$((pipelined + 1))
+done
+echo "check_install: examples/pipeline encoded, decoded and verified $pipelined files: the installed tool's bytes, within the error target"
