@@ -1,0 +1,274 @@
+#include "rate_control_driver.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "motion_quantization.h"
+#include "rate_control.h"
+#include "reconstruction.h"
+
+namespace segmorph {
+namespace {
+
+// Other motion step ratios tried with an error target (which one wins depends on the sequence: docs/codec.md).
+constexpr double kMotionStepRatioTrials[] = {0.25, 1.0};
+
+class RateControlDriver {
+ public:
+  RateControlDriver(const EncodeProblem& problem, const Clusters& clusters, const AffineMotion& fitted,
+                    StreamContent& content, StreamReport& report)
+      : p_(problem),
+        settings_(problem.settings),
+        clusters_(clusters),
+        fitted_(fitted),
+        radius_(cluster_radius(problem.base_welded, fitted.centroid, clusters.label)),
+        content_(content),
+        report_(report) {}
+
+  // The motion and residual steps, as the target mode asks.
+  void choose_steps();
+  // The residual symbols for the chosen steps and the stream (with a rate target, re-encoded until it lands on it).
+  void encode(std::vector<uint8_t>& stream, std::vector<float>& decoded);
+
+ private:
+  void extend(const std::vector<double> (&candidates)[3]);
+  template <typename Choose>
+  void refine_steps(StepChoice& choice, Choose choose);
+  void prepare_motion(double motion_step);
+  size_t side_bytes();
+  StepChoice choose();
+  void residual_rate_control(bool fresh);
+  void choose_motion_step_ratio();
+  void encode_residuals(std::vector<uint8_t>& stream, std::vector<float>& decoded);
+  void set_residual_steps() {
+    for (int axis = 0; axis < 3; ++axis) content_.residual_step[axis] = float(curves_[axis].step[choice_.index[axis]]);
+  }
+
+  const EncodeProblem& p_;
+  const CodecSettings& settings_;
+  const Clusters& clusters_;
+  const AffineMotion& fitted_;
+  const double radius_;  // RMS cluster radius: the linear step is the translation step over it
+  StreamContent& content_;
+  StreamReport& report_;
+  double mean_step_ = 0;
+  std::vector<double> predictions_;
+  StepChoice choice_;
+  SubbandCurve curves_[3];
+  double residual_budget_ = 0;
+  StreamSizes sizes_;
+};
+
+// Measures more candidate steps of the subbands (those not measured yet; candidates[axis]) and adds them to their
+// curves, all in one walk.
+void RateControlDriver::extend(const std::vector<double> (&candidates)[3]) {
+  std::vector<double> steps[3];
+  for (int axis = 0; axis < 3; ++axis)
+    for (double candidate : candidates[axis]) {
+      const double step = std::max(candidate, p_.finest_step);
+      const std::vector<double>& measured = curves_[axis].step;
+      if (std::find(measured.begin(), measured.end(), double(float(step))) == measured.end() &&
+          std::find(steps[axis].begin(), steps[axis].end(), step) == steps[axis].end())
+        steps[axis].push_back(step);
+    }
+  measure_subbands(content_, p_.traversal, predictions_, p_.trajectories.positions, p_.multiplicity, steps, curves_);
+}
+
+// Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1, ±2), after widening the
+// range while a choice sits on its edge (very low or very high targets); then chooses again.
+template <typename Choose>
+void RateControlDriver::refine_steps(StepChoice& choice, Choose choose) {
+  for (int widen = 0; widen < 6; ++widen) {
+    std::vector<double> beyond[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::vector<double>& measured = curves_[axis].step;
+      const double chosen = measured[choice.index[axis]];
+      const bool top = chosen == *std::max_element(measured.begin(), measured.end());
+      const bool bottom = chosen == *std::min_element(measured.begin(), measured.end());
+      if (!top && !bottom) continue;
+      for (int j = 1; j <= 4; ++j) beyond[axis].push_back(chosen * std::exp2(top ? j : -j));
+    }
+    if (beyond[0].empty() && beyond[1].empty() && beyond[2].empty()) break;
+    extend(beyond);
+    choice = choose();
+  }
+  std::vector<double> fine[3];
+  for (int axis = 0; axis < 3; ++axis)
+    for (int j = -2; j <= 2; ++j)
+      if (j != 0) fine[axis].push_back(curves_[axis].step[choice.index[axis]] * std::exp2(j / 4.0));
+  extend(fine);
+  choice = choose();
+}
+
+// Quantized motion and weights for a motion step (translation step; the linear step is it over the RMS cluster
+// radius), and the predictions they give.
+void RateControlDriver::prepare_motion(double motion_step) {
+  auto begin = EncodeClock::now();
+  motion_step = std::max(motion_step, p_.finest_step);
+  const bool lossless = settings_.mode == RateMode::lossless;
+  quantize_motion_and_weights(fitted_, lossless ? 1e-6 : motion_step / radius_, lossless ? 1e-6 * radius_ : motion_step,
+                              p_.base_welded, p_.trajectories, clusters_, p_.adjacency, settings_.blend_weights,
+                              content_);
+  report_.ms_motion += milliseconds_since(begin);
+  begin = EncodeClock::now();
+  predictions_ = predicted_frames(content_, p_.base_welded);
+  report_.ms_prediction += milliseconds_since(begin);
+}
+
+// Bytes of the stream without residuals (header, welding, labels, motion, weights).
+size_t RateControlDriver::side_bytes() {
+  content_.residuals.clear();
+  std::vector<uint8_t> side;
+  write_stream(content_, p_.base, side);
+  return side.size();
+}
+
+StepChoice RateControlDriver::choose() {
+  return settings_.mode == RateMode::error ? steps_for_distortion(curves_, p_.max_distortion())
+                                           : steps_for_bits(curves_, residual_budget_);
+}
+
+// The residual steps for the current predictions: coarse candidates an octave apart around the expected step (unless
+// the curves already hold measurements for these predictions), then refined.
+void RateControlDriver::residual_rate_control(bool fresh) {
+  const auto begin = EncodeClock::now();
+  if (settings_.mode == RateMode::bpvf)
+    residual_budget_ = std::max(0.0, settings_.target * double(p_.vertex_count) * double(p_.frames_total) -
+                                         8.0 * double(side_bytes() + settings_.outside_bytes));
+  if (fresh) {
+    std::vector<double> coarse[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      curves_[axis] = SubbandCurve();
+      for (int j = -2; j <= 2; ++j) coarse[axis].push_back(mean_step_ * std::exp2(j));
+    }
+    extend(coarse);
+  }
+  choice_ = choose();
+  refine_steps(choice_, [this] { return choose(); });
+  set_residual_steps();
+  report_.ms_rate_control += milliseconds_since(begin);
+}
+
+// With an error target the residual step is known in advance; the motion step ratio β is chosen among a few values by
+// the estimated total size, each trial measured at the steps around the first's choice and the winner's measurements
+// then refined.
+void RateControlDriver::choose_motion_step_ratio() {
+  const double guess = mean_step_;
+  prepare_motion(kMotionStepRatio * guess);
+  residual_rate_control(true);
+  const StepChoice first = choice_;
+  double best_ratio = kMotionStepRatio, best_bytes = double(side_bytes()) + choice_.bits / 8;
+  SubbandCurve best_curves[3] = {curves_[0], curves_[1], curves_[2]};
+  const SubbandCurve first_curves[3] = {curves_[0], curves_[1], curves_[2]};
+  for (double ratio : kMotionStepRatioTrials) {
+    prepare_motion(ratio * guess);
+    const auto begin = EncodeClock::now();
+    std::vector<double> near[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      curves_[axis] = SubbandCurve();
+      for (int j = -1; j <= 1; ++j) near[axis].push_back(first_curves[axis].step[first.index[axis]] * std::exp2(j / 4.0));
+    }
+    extend(near);
+    const StepChoice trial = choose();
+    report_.ms_rate_control += milliseconds_since(begin);
+    const double bytes = double(side_bytes()) + trial.bits / 8;
+    if (trial.distortion <= p_.max_distortion() && bytes < best_bytes) {
+      best_bytes = bytes, best_ratio = ratio;
+      for (int axis = 0; axis < 3; ++axis) best_curves[axis] = curves_[axis];
+    }
+  }
+  prepare_motion(best_ratio * guess);
+  for (int axis = 0; axis < 3; ++axis) curves_[axis] = best_curves[axis];
+  if (best_ratio == kMotionStepRatio)
+    choice_ = first;  // already refined
+  else
+    residual_rate_control(false);
+  set_residual_steps();
+}
+
+// The motion steps trade side information against prediction quality. They are tied to the residual step: motion step
+// = β × mean residual step. With a rate target, two passes (the second with the first's residual steps) at
+// β = kMotionStepRatio; with an error target, choose_motion_step_ratio.
+void RateControlDriver::choose_steps() {
+  mean_step_ = p_.mean_step;
+  if (settings_.mode == RateMode::lossless) {
+    prepare_motion(0);
+  } else if (settings_.mode == RateMode::bpvf) {
+    for (int pass = 0; pass < 2; ++pass) {
+      prepare_motion(kMotionStepRatio * mean_step_);
+      residual_rate_control(true);
+      mean_step_ = (content_.residual_step[0] + content_.residual_step[1] + content_.residual_step[2]) / 3.0;
+    }
+  } else {
+    choose_motion_step_ratio();
+  }
+}
+
+// Residual symbols by the decoder's own loop, then the stream; `decoded` receives the reconstruction.
+void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vector<float>& decoded) {
+  const bool lossless = settings_.mode == RateMode::lossless;
+  const std::vector<float>& targets = p_.trajectories.positions;
+  content_.residuals.assign(predictions_.size(), 0);
+  decoded.resize(predictions_.size());
+  double inverse_step[3];
+  for (int axis = 0; axis < 3; ++axis) inverse_step[axis] = 1.0 / double(content_.residual_step[axis]);
+  ResidualReconstructor reconstructor(content_, p_.traversal);
+  const size_t row = p_.welded * 3;
+  size_t frame = 0;
+  for (uint32_t frames_in_clip : content_.clip_frames) {
+    reconstructor.start_clip();
+    for (uint32_t f = 0; f < frames_in_clip; ++f, ++frame) {
+      const size_t offset = frame * row;
+      reconstructor.frame(
+          &predictions_[offset],
+          [&](size_t i, double p, double r) -> int64_t {
+            const float x = targets[offset + i];
+            if (lossless) return content_.residuals[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
+            return content_.residuals[offset + i] = quantizer_index((double(x) - p - r) * inverse_step[i % 3]);
+          },
+          [&](size_t i, float x) { decoded[offset + i] = x; });
+    }
+  }
+  stream.clear();
+  write_stream(content_, p_.base, stream, &sizes_);
+}
+
+void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<float>& decoded) {
+  const auto start = EncodeClock::now();
+  encode_residuals(stream, decoded);
+  if (settings_.mode == RateMode::bpvf) {
+    // The rate estimate is an estimate: correct the residual budget by what the coder really produced until the
+    // output lands within 3 % below the target.
+    const double target_bits = settings_.target * double(p_.vertex_count) * double(p_.frames_total);
+    double budget = choice_.bits;
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      const double actual = 8.0 * double(stream.size() + settings_.outside_bytes);
+      if (actual <= target_bits && actual >= 0.97 * target_bits) break;
+      const double residual_actual = 8.0 * double(sizes_.residuals);
+      const double residual_target = target_bits - (actual - residual_actual);
+      if (!(residual_target > 0) || !(residual_actual > 0)) break;
+      budget *= residual_target / residual_actual * (actual > target_bits ? 0.995 : 1.0);
+      auto choose_budget = [&] { return steps_for_bits(curves_, budget); };
+      choice_ = choose_budget();
+      refine_steps(choice_, choose_budget);
+      set_residual_steps();
+      encode_residuals(stream, decoded);
+    }
+  }
+  report_.ms_entropy = milliseconds_since(start);
+  report_.bytes_motion = sizes_.motion;
+  report_.bytes_residuals = sizes_.residuals;
+  report_.bytes_total = stream.size();
+  for (int axis = 0; axis < 3; ++axis) report_.residual_steps[axis] = content_.residual_step[axis];
+}
+
+}  // namespace
+
+void code_stream(const EncodeProblem& problem, const Clusters& clusters, const AffineMotion& fitted,
+                 StreamContent& content, StreamReport& report, std::vector<uint8_t>& stream, std::vector<float>& decoded) {
+  RateControlDriver driver(problem, clusters, fitted, content, report);
+  driver.choose_steps();
+  driver.encode(stream, decoded);
+}
+
+}  // namespace segmorph
