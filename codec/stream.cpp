@@ -33,6 +33,198 @@ struct Models {
   // The residuals' models are residual_coding.cpp's.
 };
 
+
+// Writer and reader walk the head of a stream (everything before the residual steps) with one function, code_head,
+// so that they cannot disagree on an order or a model: HeadWriter codes the value it is given, HeadReader overwrites
+// it with the one it reads and checks it, and grows the content's arrays only as the data proves to be there.
+struct HeadWriter {
+  static constexpr bool kReading = false;
+  RangeEncoder& coder;
+  void count(UnsignedModel& model, uint32_t& value) { model.encode(coder, value); }
+  void bit(BitModel& model, uint32_t& value) { coder.encode_bit(model, value); }
+  void tree(BitTreeModel& model, uint32_t& value) { model.encode(coder, value); }
+  void integer(SignedModel& model, int32_t& value) { model.encode(coder, value); }
+  void float_bits(float& value) { coder.encode_direct_bits(segmorph::float_bits(value), 32); }
+  template <typename T>
+  void grow(std::vector<T>& values, size_t size) {
+    assert(values.size() >= size);  // the writer's content is complete
+    (void)values, (void)size;
+  }
+  bool failed() const { return false; }
+  Status status() const { return Status::Ok(); }
+};
+
+struct HeadReader {
+  static constexpr bool kReading = true;
+  RangeDecoder& coder;
+  void count(UnsignedModel& model, uint32_t& value) { value = model.decode(coder); }
+  void bit(BitModel& model, uint32_t& value) { value = coder.decode_bit(model); }
+  void tree(BitTreeModel& model, uint32_t& value) { value = model.decode(coder); }
+  void integer(SignedModel& model, int32_t& value) { value = model.decode(coder); }
+  void float_bits(float& value) { value = bits_float(coder.decode_direct_bits(32)); }
+  template <typename T>
+  void grow(std::vector<T>& values, size_t size) {
+    values.resize(size);
+  }
+  bool failed() const { return coder.failed(); }
+  Status status() const { return coder.finish(); }
+};
+
+Status corrupt(const std::string& what) { return Status(StatusCode::bad_data, "animation stream: " + what); }
+
+// The header counts: the vertex count (which must be the base mesh's), the clips and their frames.
+template <class Coder>
+Status code_counts(Coder& coder, Models& models, const std::vector<float>& base, StreamContent& content) {
+  coder.count(models.count, content.vertex_count);
+  if (coder.failed()) return coder.status();
+  if (content.vertex_count != base.size() / 3)
+    return corrupt("it is for " + std::to_string(content.vertex_count) + " vertices, the base mesh has " +
+                   std::to_string(base.size() / 3));
+  uint32_t clips = uint32_t(content.clip_frames.size());
+  coder.count(models.count, clips);
+  if (coder.failed() || clips == 0 || clips > format::kMaxClips) return corrupt("bad clip count");
+  uint64_t total_frames = 0;
+  for (uint32_t c = 0; c < clips; ++c) {
+    coder.grow(content.clip_frames, c + 1);
+    coder.count(models.count, content.clip_frames[c]);
+    total_frames += content.clip_frames[c];
+    if (coder.failed() || content.clip_frames[c] == 0 || total_frames * content.vertex_count > format::kMaxVertexFrames)
+      return corrupt("bad frame count");
+  }
+  return Status::Ok();
+}
+
+// Welding, group by group (groups of identical base positions, which the decoder finds itself): one bit "the group is
+// one welded vertex"; otherwise, for each member after the first, the position within the group of the earlier member
+// it welds to, or its own position when it starts a new welded vertex. Then the welded index of every vertex.
+template <class Coder>
+Status code_welding(Coder& coder, Models& models, const std::vector<float>& base, StreamContent& content) {
+  std::vector<uint32_t> leader(content.vertex_count);
+  std::iota(leader.begin(), leader.end(), 0u);
+  for (const std::vector<uint32_t>& group : identical_position_groups(base)) {
+    if (group.size() < 2) continue;
+    uint32_t one = 1;
+    if (!Coder::kReading)
+      for (uint32_t v : group) one = one && content.welded_index[v] == content.welded_index[group[0]];
+    coder.bit(models.group_welded, one);
+    if (one) {
+      for (uint32_t v : group) leader[v] = group[0];
+      continue;
+    }
+    for (size_t j = 1; j < group.size(); ++j) {
+      uint32_t target = uint32_t(j);
+      if (!Coder::kReading)
+        for (size_t i = 0; i < j && target == j; ++i)
+          if (content.welded_index[group[i]] == content.welded_index[group[j]]) target = uint32_t(i);
+      coder.count(models.group_member, target);
+      if (target > j) return corrupt("bad welding");
+      leader[group[j]] = target == j ? group[j] : leader[group[target]];
+    }
+    if (coder.failed()) return coder.status();
+  }
+  if (Coder::kReading) {
+    content.welded_index.assign(content.vertex_count, UINT32_MAX);
+    content.welded_count = 0;
+    for (uint32_t v = 0; v < content.vertex_count; ++v)
+      content.welded_index[v] = leader[v] == v ? content.welded_count++ : content.welded_index[leader[v]];
+  }
+  return Status::Ok();
+}
+
+// The clusters: their count, each welded vertex's label.
+template <class Coder>
+Status code_labels(Coder& coder, Models& models, StreamContent& content) {
+  coder.count(models.count, content.cluster_count);
+  if (coder.failed() || content.cluster_count == 0 || content.cluster_count > format::kMaxClusters ||
+      content.cluster_count > content.welded_count)
+    return corrupt("bad cluster count");
+  BitTreeModel label_model(bits_for(content.cluster_count));
+  coder.grow(content.labels, content.welded_count);
+  for (size_t w = 0; w < content.welded_count; ++w) {
+    coder.tree(label_model, content.labels[w]);
+    if (content.labels[w] >= content.cluster_count) return corrupt("cluster label out of range");
+  }
+  return Status::Ok();
+}
+
+// The motion: its two steps, then per frame and cluster 12 coefficients, each as its difference from the previous
+// frame's. The motion grows a frame at a time as it is read, never sized up front by the counts: a stream of a few
+// bytes can claim kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.
+template <class Coder>
+Status code_motion(Coder& coder, Models& models, StreamContent& content) {
+  coder.float_bits(content.linear_step);
+  coder.float_bits(content.translation_step);
+  if (!(content.linear_step > 0) || !(content.translation_step > 0) || !std::isfinite(content.linear_step) ||
+      !std::isfinite(content.translation_step))
+    return corrupt("bad motion quantizer steps");
+  const size_t clusters = content.cluster_count, frames = content.frame_count();
+  if (uint64_t(frames) * clusters > format::kMaxVertexFrames) return corrupt("too many clusters for its frames");
+  for (size_t f = 0; f < frames; ++f) {
+    coder.grow(content.motion, (f + 1) * clusters * 12);
+    for (size_t k = 0; k < clusters; ++k)
+      for (size_t c = 0; c < 12; ++c) {
+        const size_t index = (f * clusters + k) * 12 + c;
+        const int32_t previous = f == 0 ? 0 : content.motion[index - clusters * 12];
+        int32_t delta = int32_t(int64_t(content.motion[index]) - previous);  // the writer's; the reader's overwritten
+        coder.integer(models.motion[c], delta);
+        const int64_t value = int64_t(previous) + delta;
+        if (value < INT32_MIN || value > INT32_MAX) return corrupt("motion coefficient out of range");
+        if (Coder::kReading) content.motion[index] = int32_t(value);
+      }
+    if (coder.failed()) return coder.status();
+  }
+  return Status::Ok();
+}
+
+// The weights: their precision, then per welded vertex its extra clusters and their weights.
+template <class Coder>
+Status code_weights(Coder& coder, Models& models, StreamContent& content) {
+  uint32_t weight_bits = uint32_t(content.weight_bits);
+  coder.count(models.count, weight_bits);
+  if (Coder::kReading) content.weight_bits = int(weight_bits);
+  if (content.weight_bits < 1 || content.weight_bits > format::kMaxWeightBits) return corrupt("bad weight precision");
+  BitTreeModel cluster_model(bits_for(content.cluster_count));
+  if (Coder::kReading) content.weight_offset.assign(1, 0);
+  for (size_t w = 0; w < content.welded_count; ++w) {
+    const uint32_t first = content.weight_offset[w];
+    uint32_t extra = Coder::kReading ? 0 : content.weight_offset[w + 1] - first;
+    coder.tree(models.extra_count, extra);
+    if (extra > format::kMaxExtraWeights) return corrupt("too many weights");
+    coder.grow(content.weight_cluster, first + extra);
+    coder.grow(content.weight_value, first + extra);
+    for (uint32_t i = first; i < first + extra; ++i) {
+      coder.tree(cluster_model, content.weight_cluster[i]);
+      if (content.weight_cluster[i] >= content.cluster_count) return corrupt("weight cluster out of range");
+      coder.integer(models.weight, content.weight_value[i]);
+    }
+    if (Coder::kReading) content.weight_offset.push_back(first + extra);
+    if (coder.failed()) return coder.status();
+  }
+  return Status::Ok();
+}
+
+// Everything before the residual symbols, the residual steps included.
+template <class Coder>
+Status code_head(Coder& coder, Models& models, const std::vector<float>& base, StreamContent& content) {
+  SEGMORPH_RETURN_IF_ERROR(code_counts(coder, models, base, content));
+  SEGMORPH_RETURN_IF_ERROR(code_welding(coder, models, base, content));
+  SEGMORPH_RETURN_IF_ERROR(code_labels(coder, models, content));
+  SEGMORPH_RETURN_IF_ERROR(code_motion(coder, models, content));
+  SEGMORPH_RETURN_IF_ERROR(code_weights(coder, models, content));
+  return Status::Ok();
+}
+
+// The residual quantizer steps, one per axis (lossless streams: not used).
+template <class Coder>
+Status code_residual_steps(Coder& coder, StreamContent& content) {
+  const bool lossless = content.flags & format::kFlagLossless;
+  for (int axis = 0; axis < 3; ++axis) {
+    coder.float_bits(content.residual_step[axis]);
+    if (!lossless && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
+      return corrupt("bad residual quantizer step");
+  }
+  return coder.failed() ? coder.status() : Status::Ok();
+}
 }  // namespace
 
 size_t StreamContent::frame_count() const {
@@ -86,57 +278,18 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   out.insert(out.end(), 4, 0);  // body length, filled in at the end
   RangeEncoder encoder(out);
   Models models;
-
-  models.count.encode(encoder, content.vertex_count);
-  models.count.encode(encoder, uint32_t(content.clip_frames.size()));
-  for (uint32_t frames : content.clip_frames) models.count.encode(encoder, frames);
-
-  // Welding, group by group (groups of identical base positions, which the decoder finds itself): one bit
-  // "the group is one welded vertex"; otherwise, for each member after the first, the position within the
-  // group of the earlier member it welds to, or its own position when it starts a new welded vertex.
-  for (const std::vector<uint32_t>& group : identical_position_groups(base)) {
-    if (group.size() < 2) continue;
-    bool one = true;
-    for (uint32_t v : group) one = one && content.welded_index[v] == content.welded_index[group[0]];
-    encoder.encode_bit(models.group_welded, one ? 1 : 0);
-    if (one) continue;
-    for (size_t j = 1; j < group.size(); ++j) {
-      size_t target = j;
-      for (size_t i = 0; i < j && target == j; ++i)
-        if (content.welded_index[group[i]] == content.welded_index[group[j]]) target = i;
-      models.group_member.encode(encoder, uint32_t(target));
-    }
-  }
-
-  models.count.encode(encoder, content.cluster_count);
-  BitTreeModel label_model(bits_for(content.cluster_count));
-  for (uint32_t label : content.labels) label_model.encode(encoder, label);
-
-  encoder.encode_direct_bits(float_bits(content.linear_step), 32);
-  encoder.encode_direct_bits(float_bits(content.translation_step), 32);
-  const size_t clusters = content.cluster_count;
-  for (size_t f = 0; f < content.frame_count(); ++f)
-    for (size_t k = 0; k < clusters; ++k)
-      for (size_t c = 0; c < 12; ++c) {
-        const size_t index = (f * clusters + k) * 12 + c;
-        const int32_t previous = f == 0 ? 0 : content.motion[index - clusters * 12];
-        models.motion[c].encode(encoder, content.motion[index] - previous);
-      }
-
-  models.count.encode(encoder, uint32_t(content.weight_bits));
-  BitTreeModel cluster_model(bits_for(content.cluster_count));
-  for (size_t w = 0; w < content.welded_count; ++w) {
-    models.extra_count.encode(encoder, content.weight_offset[w + 1] - content.weight_offset[w]);
-    for (uint32_t i = content.weight_offset[w]; i < content.weight_offset[w + 1]; ++i) {
-      cluster_model.encode(encoder, content.weight_cluster[i]);
-      models.weight.encode(encoder, content.weight_value[i]);
-    }
-  }
+  HeadWriter writer{encoder};
+  // The walk takes the content by reference for the reader's sake; the writer never writes to it.
+  StreamContent& fields = const_cast<StreamContent&>(content);
+  Status status = code_head(writer, models, base, fields);
+  assert(status.ok());
   const size_t motion_end = out.size();
+  status = code_residual_steps(writer, fields);
+  assert(status.ok());
+  (void)status;
 
   const bool lossless = content.flags & format::kFlagLossless;
   assert(!(table && lossless));
-  for (int axis = 0; axis < 3; ++axis) encoder.encode_direct_bits(float_bits(content.residual_step[axis]), 32);
   // The table code's tables and initial states are written even without residuals (the encoder measures such
   // streams for the size of everything but the residuals); the adaptive code writes nothing then.
   std::vector<uint8_t> symbols;  // the table code's rANS words, after the body
@@ -189,102 +342,10 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
   decoder_ = std::make_unique<RangeDecoder>(data + format::kHeaderBytes, length);
   RangeDecoder& decoder = *decoder_;
   Models models;
-  auto corrupt = [](const std::string& what) { return Status(StatusCode::bad_data, "animation stream: " + what); };
-
-  content.vertex_count = models.count.decode(decoder);
-  if (decoder.failed()) return decoder.finish();
-  if (content.vertex_count != base.size() / 3)
-    return corrupt("it is for " + std::to_string(content.vertex_count) + " vertices, the base mesh has " +
-                   std::to_string(base.size() / 3));
-  const uint32_t clips = models.count.decode(decoder);
-  if (decoder.failed() || clips == 0 || clips > format::kMaxClips) return corrupt("bad clip count");
-  uint64_t total_frames = 0;
-  for (uint32_t c = 0; c < clips; ++c) {
-    const uint32_t frames = models.count.decode(decoder);
-    total_frames += frames;
-    if (decoder.failed() || frames == 0 || total_frames * content.vertex_count > format::kMaxVertexFrames)
-      return corrupt("bad frame count");
-    content.clip_frames.push_back(frames);
-  }
-
-  // Welding.
-  content.welded_index.assign(content.vertex_count, UINT32_MAX);
-  std::vector<uint32_t> leader(content.vertex_count);
-  std::iota(leader.begin(), leader.end(), 0u);
-  for (const std::vector<uint32_t>& group : identical_position_groups(base)) {
-    if (group.size() < 2) continue;
-    if (decoder.decode_bit(models.group_welded)) {
-      for (uint32_t v : group) leader[v] = group[0];
-      continue;
-    }
-    for (size_t j = 1; j < group.size(); ++j) {
-      const uint32_t target = models.group_member.decode(decoder);
-      if (target > j) return corrupt("bad welding");
-      leader[group[j]] = target == j ? group[j] : leader[group[target]];
-    }
-    if (decoder.failed()) return decoder.finish();
-  }
-  for (uint32_t v = 0; v < content.vertex_count; ++v)
-    content.welded_index[v] = leader[v] == v ? content.welded_count++ : content.welded_index[leader[v]];
-
-  content.cluster_count = models.count.decode(decoder);
-  if (decoder.failed() || content.cluster_count == 0 || content.cluster_count > format::kMaxClusters ||
-      content.cluster_count > content.welded_count)
-    return corrupt("bad cluster count");
-  BitTreeModel label_model(bits_for(content.cluster_count));
-  content.labels.resize(content.welded_count);
-  for (uint32_t& label : content.labels) {
-    label = label_model.decode(decoder);
-    if (label >= content.cluster_count) return corrupt("cluster label out of range");
-  }
-
-  content.linear_step = bits_float(decoder.decode_direct_bits(32));
-  content.translation_step = bits_float(decoder.decode_direct_bits(32));
-  if (!(content.linear_step > 0) || !(content.translation_step > 0) || !std::isfinite(content.linear_step) ||
-      !std::isfinite(content.translation_step))
-    return corrupt("bad motion quantizer steps");
-  const size_t clusters = content.cluster_count, frames = content.frame_count();
-  if (uint64_t(frames) * clusters > format::kMaxVertexFrames) return corrupt("too many clusters for its frames");
-  // The motion and the residuals grow as they are decoded, never sized up front by the counts: a stream of a
-  // few bytes can claim kMaxVertexFrames positions (gigabytes), and its data runs out (decoder.failed()) long
-  // before memory would.
-  for (size_t f = 0; f < frames; ++f) {
-    content.motion.resize((f + 1) * clusters * 12);
-    for (size_t k = 0; k < clusters; ++k)
-      for (size_t c = 0; c < 12; ++c) {
-        const size_t index = (f * clusters + k) * 12 + c;
-        const int64_t value =
-            int64_t(f == 0 ? 0 : content.motion[index - clusters * 12]) + models.motion[c].decode(decoder);
-        if (value < INT32_MIN || value > INT32_MAX) return corrupt("motion coefficient out of range");
-        content.motion[index] = int32_t(value);
-      }
-    if (decoder.failed()) return decoder.finish();
-  }
-
-  content.weight_bits = int(models.count.decode(decoder));
-  if (content.weight_bits < 1 || content.weight_bits > format::kMaxWeightBits) return corrupt("bad weight precision");
-  BitTreeModel cluster_model(bits_for(content.cluster_count));
-  content.weight_offset.assign(1, 0);
-  for (size_t w = 0; w < content.welded_count; ++w) {
-    const uint32_t extra = models.extra_count.decode(decoder);
-    if (extra > format::kMaxExtraWeights) return corrupt("too many weights");
-    for (uint32_t i = 0; i < extra; ++i) {
-      const uint32_t cluster = cluster_model.decode(decoder);
-      if (cluster >= content.cluster_count) return corrupt("weight cluster out of range");
-      content.weight_cluster.push_back(cluster);
-      content.weight_value.push_back(models.weight.decode(decoder));
-    }
-    content.weight_offset.push_back(uint32_t(content.weight_cluster.size()));
-    if (decoder.failed()) return decoder.finish();
-  }
-
+  HeadReader reader{decoder};
+  SEGMORPH_RETURN_IF_ERROR(code_head(reader, models, base, content));
+  SEGMORPH_RETURN_IF_ERROR(code_residual_steps(reader, content));
   const bool lossless = content.flags & format::kFlagLossless;
-  for (int axis = 0; axis < 3; ++axis) {
-    content.residual_step[axis] = bits_float(decoder.decode_direct_bits(32));
-    if (!lossless && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
-      return corrupt("bad residual quantizer step");
-  }
-  if (decoder.failed()) return decoder.finish();
   if (table) {
     const size_t start = format::kHeaderBytes + body_size_;
     table_residuals_ = std::make_unique<TableResidualDecoder>(content.welded_count, data + start, size - start);
