@@ -165,171 +165,205 @@ Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<s
 // for every vertex would take time quadratic in their number.
 constexpr size_t kMaxCandidates = 16, kMaxScanned = 1024;
 
-Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings,
-                              std::vector<uint32_t>& source) {
-  const std::vector<float>& positions = original.attributes[0].values;
-  const std::vector<float>& decoded_positions = decoded.attributes[0].values;
+namespace {
+
+// The search behind match_decoded_vertices: a grid of the originals' positions in cells of one quantization step, the
+// cost of a pairing, the candidates of a decoded vertex, and the triangle-by-triangle matching, surest first.
+class VertexMatcher {
+ public:
+  VertexMatcher(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings);
+  Status match(std::vector<uint32_t>& source);
+
+ private:
+  struct Fit {
+    double score = INFINITY, sureness = 0;
+    uint32_t triangle = 0, corners[3] = {0, 0, 0};
+  };
+  // Cell coordinates hashed in unsigned arithmetic, and 0 for a cell beyond ±2^62 (or NaN): no overflow for any
+  // float.
+  int64_t cell(const float* p, int c) const {
+    const double q = std::floor(double(p[c]) / step_);
+    return q >= -0x1p62 && q <= 0x1p62 ? int64_t(q) : int64_t(0);
+  }
+  static uint64_t key(int64_t x, int64_t y, int64_t z) {
+    return uint64_t(x) * 73856093u ^ uint64_t(y) * 19349663u ^ uint64_t(z) * 83492791u;
+  }
+  double cost(uint32_t p, uint32_t v) const;
+  std::vector<uint32_t> candidates(uint32_t p) const;
+  Fit best_fit(uint32_t d, const std::vector<uint32_t>& source) const;
+  void match_triangles(std::vector<uint32_t>& source);
+  Status match_leftovers(std::vector<uint32_t>& source) const;
+
+  const BaseMesh& original_;
+  const BaseMesh& decoded_;
+  const std::vector<float>& positions_;
+  const std::vector<float>& decoded_positions_;
+  double step_ = 1;
+  std::unordered_multimap<uint64_t, uint32_t> grid_;
+  // Other attributes, by semantic, to tell apart vertices that share a position (seams).
+  std::vector<std::pair<const BaseMeshAttribute*, const BaseMeshAttribute*>> others_;
+  std::vector<std::vector<uint32_t>> incident_, decoded_incident_, corner_candidates_;
+  std::vector<bool> taken_;
+};
+
+VertexMatcher::VertexMatcher(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings)
+    : original_(original),
+      decoded_(decoded),
+      positions_(original.attributes[0].values),
+      decoded_positions_(decoded.attributes[0].values) {
   double extent = 0;
   for (int c = 0; c < 3; ++c) {
     double low = INFINITY, high = -INFINITY;
     for (size_t v = 0; v < original.vertex_count; ++v) {
-      low = std::min(low, double(positions[v * 3 + size_t(c)]));
-      high = std::max(high, double(positions[v * 3 + size_t(c)]));
+      low = std::min(low, double(positions_[v * 3 + size_t(c)]));
+      high = std::max(high, double(positions_[v * 3 + size_t(c)]));
     }
     if (original.vertex_count) extent = std::max(extent, high - low);
   }
   // Draco's positions are within half a step per axis of the originals; a step is the search radius.
   // A mesh of one point (extent 0) is one cell of any size.
-  const double step = extent > 0 ? extent / double((1 << settings.position_bits) - 1) : 1.0;
-  // Cell coordinates hashed in unsigned arithmetic, and 0 for a cell beyond ±2^62 (or NaN): no overflow for
-  // any float.
-  auto cell = [&](const float* p, int c) {
-    const double q = std::floor(double(p[c]) / step);
-    return q >= -0x1p62 && q <= 0x1p62 ? int64_t(q) : int64_t(0);
-  };
-  auto key = [](int64_t x, int64_t y, int64_t z) {
-    return uint64_t(x) * 73856093u ^ uint64_t(y) * 19349663u ^ uint64_t(z) * 83492791u;
-  };
-  std::unordered_multimap<uint64_t, uint32_t> grid;
-  grid.reserve(original.vertex_count);
+  step_ = extent > 0 ? extent / double((1 << settings.position_bits) - 1) : 1.0;
+  grid_.reserve(original.vertex_count);
   for (uint32_t v = 0; v < original.vertex_count; ++v)
-    grid.emplace(key(cell(&positions[size_t(v) * 3], 0), cell(&positions[size_t(v) * 3], 1),
-                     cell(&positions[size_t(v) * 3], 2)),
-                 v);
-
-  // Other attributes, by semantic, to tell apart vertices that share a position (seams).
-  std::vector<std::pair<const BaseMeshAttribute*, const BaseMeshAttribute*>> others;
+    grid_.emplace(key(cell(&positions_[size_t(v) * 3], 0), cell(&positions_[size_t(v) * 3], 1),
+                      cell(&positions_[size_t(v) * 3], 2)),
+                  v);
   for (size_t a = 1; a < decoded.attributes.size(); ++a)
     for (size_t b = 1; b < original.attributes.size(); ++b)
       if (original.attributes[b].semantic == decoded.attributes[a].semantic &&
           original.attributes[b].components == decoded.attributes[a].components)
-        others.push_back({&original.attributes[b], &decoded.attributes[a]});
+        others_.push_back({&original.attributes[b], &decoded.attributes[a]});
+}
 
-  // How unlike original vertex v decoded vertex p is; infinite beyond a step.
-  auto cost = [&](uint32_t p, uint32_t v) {
-    const float* q = &decoded_positions[size_t(p) * 3];
-    double distance = 0;
-    for (int c = 0; c < 3; ++c) distance += std::pow(double(q[c]) - positions[size_t(v) * 3 + size_t(c)], 2);
-    if (distance > step * step) return double(INFINITY);
-    double total = distance / (step * step);
-    for (const auto& [from, to] : others)
-      for (int c = 0; c < from->components; ++c)
-        total += std::pow(double(to->values[size_t(p) * size_t(to->components) + size_t(c)]) -
-                              from->values[size_t(v) * size_t(from->components) + size_t(c)],
-                          2);
-    return total;
-  };
-  // The originals within a step of decoded vertex p, in increasing index order.
-  auto candidates = [&](uint32_t p) {
-    const float* q = &decoded_positions[size_t(p) * 3];
-    std::vector<uint32_t> found;
-    for (int64_t dx = -1; dx <= 1; ++dx)
-      for (int64_t dy = -1; dy <= 1; ++dy)
-        for (int64_t dz = -1; dz <= 1; ++dz) {
-          const auto range = grid.equal_range(key(cell(q, 0) + dx, cell(q, 1) + dy, cell(q, 2) + dz));
-          for (auto it = range.first; it != range.second && found.size() < kMaxScanned; ++it)
-            if (cost(p, it->second) < INFINITY) found.push_back(it->second);
-        }
-    std::sort(found.begin(), found.end());
-    found.erase(std::unique(found.begin(), found.end()), found.end());
-    // Thousands of originals can lie within one step (a dense part, a part collapsed to a point): the cheapest
-    // few bound the matching's work (equally cheap ones by index).
-    if (found.size() > kMaxCandidates) {
-      std::stable_sort(found.begin(), found.end(), [&](uint32_t a, uint32_t b) { return cost(p, a) < cost(p, b); });
-      found.resize(kMaxCandidates);
-    }
-    return found;
-  };
+// How unlike original vertex v decoded vertex p is; infinite beyond a step.
+double VertexMatcher::cost(uint32_t p, uint32_t v) const {
+  const float* q = &decoded_positions_[size_t(p) * 3];
+  double distance = 0;
+  for (int c = 0; c < 3; ++c) distance += std::pow(double(q[c]) - positions_[size_t(v) * 3 + size_t(c)], 2);
+  if (distance > step_ * step_) return double(INFINITY);
+  double total = distance / (step_ * step_);
+  for (const auto& [from, to] : others_)
+    for (int c = 0; c < from->components; ++c)
+      total += std::pow(double(to->values[size_t(p) * size_t(to->components) + size_t(c)]) -
+                            from->values[size_t(v) * size_t(from->components) + size_t(c)],
+                        2);
+  return total;
+}
 
-  // Draco keeps every triangle (it renumbers vertices and reorders triangles and their corners). Each decoded
-  // triangle is matched to an original triangle whose corners are near its own, and its corners come from that
-  // triangle's. Nearness alone is not enough: vertices of different parts can lie within a step of each other,
-  // alike in every attribute (measured: 78 triangles of the chicken and 8 of the horse came out joining vertices of
-  // different triangles when each vertex took its nearest original), and such a vertex would follow the wrong
-  // part's trajectory. So triangles are matched surest first, the sureness of a triangle being how much better its
-  // best original triangle fits than the next one, where a fit counts nearness and, far above it, whether the
-  // original triangle is still free and whether it agrees with the corners already matched; each match makes its
-  // neighbours' choices surer, so matches grow over each part from its least ambiguous triangles.
-  std::vector<std::vector<uint32_t>> incident(original.vertex_count), decoded_incident(decoded.vertex_count);
-  for (size_t t = 0; t < original.triangles.size() / 3; ++t)
-    for (int c = 0; c < 3; ++c) incident[original.triangles[t * 3 + size_t(c)]].push_back(uint32_t(t));
-  const size_t decoded_triangles = decoded.triangles.size() / 3;
-  for (size_t d = 0; d < decoded_triangles; ++d)
-    for (int c = 0; c < 3; ++c) decoded_incident[decoded.triangles[d * 3 + size_t(c)]].push_back(uint32_t(d));
-  std::vector<std::vector<uint32_t>> corner_candidates(decoded.vertex_count);
-  for (uint32_t p = 0; p < decoded.vertex_count; ++p)
-    if (!decoded_incident[p].empty()) corner_candidates[p] = candidates(p);
+// The originals within a step of decoded vertex p, in increasing index order.
+std::vector<uint32_t> VertexMatcher::candidates(uint32_t p) const {
+  const float* q = &decoded_positions_[size_t(p) * 3];
+  std::vector<uint32_t> found;
+  for (int64_t dx = -1; dx <= 1; ++dx)
+    for (int64_t dy = -1; dy <= 1; ++dy)
+      for (int64_t dz = -1; dz <= 1; ++dz) {
+        const auto range = grid_.equal_range(key(cell(q, 0) + dx, cell(q, 1) + dy, cell(q, 2) + dz));
+        for (auto it = range.first; it != range.second && found.size() < kMaxScanned; ++it)
+          if (cost(p, it->second) < INFINITY) found.push_back(it->second);
+      }
+  std::sort(found.begin(), found.end());
+  found.erase(std::unique(found.begin(), found.end()), found.end());
+  // Thousands of originals can lie within one step (a dense part, a part collapsed to a point): the cheapest few
+  // bound the matching's work (equally cheap ones by index).
+  if (found.size() > kMaxCandidates) {
+    std::stable_sort(found.begin(), found.end(), [&](uint32_t a, uint32_t b) { return cost(p, a) < cost(p, b); });
+    found.resize(kMaxCandidates);
+  }
+  return found;
+}
+
+// The original triangle that fits decoded triangle d best, with its corners, and how much better than the next.
+VertexMatcher::Fit VertexMatcher::best_fit(uint32_t d, const std::vector<uint32_t>& source) const {
   constexpr double kTaken = 1e12, kDisagrees = 1e6;
-  std::vector<bool> taken(original.triangles.size() / 3, false), matched(decoded_triangles, false);
-  source.assign(decoded.vertex_count, UINT32_MAX);
-  struct Fit {
-    double score = INFINITY, sureness = 0;
-    uint32_t triangle = 0, corners[3] = {0, 0, 0};
-  };
-  auto best_fit = [&](uint32_t d) {
-    const uint32_t* corner = &decoded.triangles[size_t(d) * 3];
-    Fit best;
-    double second = INFINITY;
-    // The original triangles around the candidates of one corner: the corner with the fewest such triangles.
-    int pivot = 0;
-    size_t fewest = SIZE_MAX;
-    for (int k = 0; k < 3; ++k) {
-      size_t around = 0;
-      for (uint32_t candidate : corner_candidates[corner[k]]) around += incident[candidate].size();
-      if (around < fewest) fewest = around, pivot = k;
-    }
-    for (uint32_t candidate : corner_candidates[corner[pivot]])
-      for (uint32_t t : incident[candidate])
-        for (int c = 0; c < 3; ++c) {
-          const uint32_t* o = &original.triangles[size_t(t) * 3];
-          if (o[c] != candidate) continue;
-          uint32_t v[3];  // the original of each corner under this match
-          for (int j = 0; j < 3; ++j) v[(pivot + j) % 3] = o[(c + j) % 3];
-          double score = taken[t] ? kTaken : 0.0;
-          for (int k = 0; k < 3; ++k) {
-            score += cost(corner[k], v[k]);
-            if (source[corner[k]] != UINT32_MAX && source[corner[k]] != v[k]) score += kDisagrees;
-          }
-          if (score < best.score) {
-            second = best.score;
-            best.score = score, best.triangle = t, best.corners[0] = v[0], best.corners[1] = v[1], best.corners[2] = v[2];
-          } else if (score < second) {
-            second = score;
-          }
+  const uint32_t* corner = &decoded_.triangles[size_t(d) * 3];
+  Fit best;
+  double second = INFINITY;
+  // The original triangles around the candidates of one corner: the corner with the fewest such triangles.
+  int pivot = 0;
+  size_t fewest = SIZE_MAX;
+  for (int k = 0; k < 3; ++k) {
+    size_t around = 0;
+    for (uint32_t candidate : corner_candidates_[corner[k]]) around += incident_[candidate].size();
+    if (around < fewest) fewest = around, pivot = k;
+  }
+  for (uint32_t candidate : corner_candidates_[corner[pivot]])
+    for (uint32_t t : incident_[candidate])
+      for (int c = 0; c < 3; ++c) {
+        const uint32_t* o = &original_.triangles[size_t(t) * 3];
+        if (o[c] != candidate) continue;
+        uint32_t v[3];  // the original of each corner under this match
+        for (int j = 0; j < 3; ++j) v[(pivot + j) % 3] = o[(c + j) % 3];
+        double score = taken_[t] ? kTaken : 0.0;
+        for (int k = 0; k < 3; ++k) {
+          score += cost(corner[k], v[k]);
+          if (source[corner[k]] != UINT32_MAX && source[corner[k]] != v[k]) score += kDisagrees;
         }
-    best.sureness = second == INFINITY ? INFINITY : second - best.score;
-    return best;
-  };
+        if (score < best.score) {
+          second = best.score;
+          best.score = score, best.triangle = t, best.corners[0] = v[0], best.corners[1] = v[1], best.corners[2] = v[2];
+        } else if (score < second) {
+          second = score;
+        }
+      }
+  best.sureness = second == INFINITY ? INFINITY : second - best.score;
+  return best;
+}
+
+// Draco keeps every triangle (it renumbers vertices and reorders triangles and their corners). Each decoded triangle
+// is matched to an original triangle whose corners are near its own, and its corners come from that triangle's.
+// Nearness alone is not enough: vertices of different parts can lie within a step of each other, alike in every
+// attribute (measured: 78 triangles of the chicken and 8 of the horse came out joining vertices of different
+// triangles when each vertex took its nearest original), and such a vertex would follow the wrong part's trajectory.
+// So triangles are matched surest first, the sureness of a triangle being how much better its best original
+// triangle fits than the next one, where a fit counts nearness and, far above it, whether the original triangle is
+// still free and whether it agrees with the corners already matched; each match makes its neighbours' choices surer,
+// so matches grow over each part from its least ambiguous triangles.
+void VertexMatcher::match_triangles(std::vector<uint32_t>& source) {
+  incident_.assign(original_.vertex_count, {});
+  decoded_incident_.assign(decoded_.vertex_count, {});
+  for (size_t t = 0; t < original_.triangles.size() / 3; ++t)
+    for (int c = 0; c < 3; ++c) incident_[original_.triangles[t * 3 + size_t(c)]].push_back(uint32_t(t));
+  const size_t decoded_triangles = decoded_.triangles.size() / 3;
+  for (size_t d = 0; d < decoded_triangles; ++d)
+    for (int c = 0; c < 3; ++c) decoded_incident_[decoded_.triangles[d * 3 + size_t(c)]].push_back(uint32_t(d));
+  corner_candidates_.assign(decoded_.vertex_count, {});
+  for (uint32_t p = 0; p < decoded_.vertex_count; ++p)
+    if (!decoded_incident_[p].empty()) corner_candidates_[p] = candidates(p);
+  taken_.assign(original_.triangles.size() / 3, false);
+  std::vector<bool> matched(decoded_triangles, false);
   // Surest first; equally sure ones in decoded order.
   std::priority_queue<std::pair<double, int64_t>> queue;
-  for (size_t d = 0; d < decoded_triangles; ++d) queue.push({best_fit(uint32_t(d)).sureness, -int64_t(d)});
+  for (size_t d = 0; d < decoded_triangles; ++d) queue.push({best_fit(uint32_t(d), source).sureness, -int64_t(d)});
   while (!queue.empty()) {
     const auto [sureness, negative_d] = queue.top();
     queue.pop();
     const uint32_t d = uint32_t(-negative_d);
     if (matched[d]) continue;
-    const Fit fit = best_fit(d);
+    const Fit fit = best_fit(d, source);
     if (fit.sureness != sureness) {  // its neighbourhood changed since it was queued
       queue.push({fit.sureness, negative_d});
       continue;
     }
     matched[d] = true;
-    if (fit.score == INFINITY) continue;  // no original triangle fits: its corners fall back on nearness below
-    taken[fit.triangle] = true;
-    const uint32_t* corner = &decoded.triangles[size_t(d) * 3];
+    if (fit.score == INFINITY) continue;  // no original triangle fits: its corners fall back on nearness
+    taken_[fit.triangle] = true;
+    const uint32_t* corner = &decoded_.triangles[size_t(d) * 3];
     for (int k = 0; k < 3; ++k) {
       if (source[corner[k]] != UINT32_MAX) continue;
       source[corner[k]] = fit.corners[k];
-      for (uint32_t neighbour : decoded_incident[corner[k]])
-        if (!matched[neighbour]) queue.push({best_fit(neighbour).sureness, -int64_t(neighbour)});
+      for (uint32_t neighbour : decoded_incident_[corner[k]])
+        if (!matched[neighbour]) queue.push({best_fit(neighbour, source).sureness, -int64_t(neighbour)});
     }
   }
-  std::vector<bool> claimed(original.vertex_count, false);
-  for (uint32_t p = 0; p < decoded.vertex_count; ++p)
+}
+
+// Vertices no matched triangle names (unused by triangles, or in a triangle Draco changed): the nearest original,
+// preferring those no decoded vertex came from yet, so that duplicates map one to one where Draco kept them apart.
+Status VertexMatcher::match_leftovers(std::vector<uint32_t>& source) const {
+  std::vector<bool> claimed(original_.vertex_count, false);
+  for (uint32_t p = 0; p < decoded_.vertex_count; ++p)
     if (source[p] != UINT32_MAX) claimed[source[p]] = true;
-  // Vertices no matched triangle names (unused by triangles, or in a triangle Draco changed): the nearest original,
-  // preferring those no decoded vertex came from yet, so that duplicates map one to one where Draco kept them apart.
-  for (uint32_t p = 0; p < decoded.vertex_count; ++p) {
+  for (uint32_t p = 0; p < decoded_.vertex_count; ++p) {
     if (source[p] != UINT32_MAX) continue;
     double best_cost = INFINITY;
     uint32_t best = UINT32_MAX;
@@ -343,6 +377,20 @@ Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded,
     claimed[best] = true;
   }
   return Status::Ok();
+}
+
+Status VertexMatcher::match(std::vector<uint32_t>& source) {
+  source.assign(decoded_.vertex_count, UINT32_MAX);
+  match_triangles(source);
+  return match_leftovers(source);
+}
+
+}  // namespace
+
+Status match_decoded_vertices(const BaseMesh& original, const BaseMesh& decoded, const DracoSettings& settings,
+                              std::vector<uint32_t>& source) {
+  VertexMatcher matcher(original, decoded, settings);
+  return matcher.match(source);
 }
 
 }  // namespace segmorph
