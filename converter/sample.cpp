@@ -261,141 +261,184 @@ void morph_positions(const std::vector<float>& rest, const std::vector<std::vect
   }
 }
 
+namespace {
+
+// Default morph weights: the node's, else the mesh's, else zeros.
+Status default_weights(const tinygltf::Node& node, const tinygltf::Mesh& mesh, size_t target_count,
+                       const std::string& label, std::vector<double>& weights) {
+  weights.assign(target_count, 0.0);
+  const std::vector<double>& defaults = !node.weights.empty() ? node.weights : mesh.weights;
+  if (defaults.empty()) return Status::Ok();
+  if (defaults.size() != target_count)
+    return Status(StatusCode::bad_data, label + ": default weights do not match the morph target count");
+  weights = defaults;
+  return Status::Ok();
+}
+
+// The skin's inverse bind matrices (identity when absent), column-major.
+Status inverse_bind_matrices(const tinygltf::Model& model, int skin_index, std::vector<Eigen::Matrix4d>& inverse_bind) {
+  const tinygltf::Skin& skin = model.skins[size_t(skin_index)];
+  inverse_bind.assign(skin.joints.size(), Eigen::Matrix4d::Identity());
+  if (skin.inverseBindMatrices < 0) return Status::Ok();
+  std::vector<float> matrices;
+  int components = 0;
+  SEGMORPH_RETURN_IF_ERROR(read_floats(model, skin.inverseBindMatrices,
+                                       "skin " + std::to_string(skin_index) + " inverseBindMatrices", matrices,
+                                       &components));
+  if (components != 16 || matrices.size() < skin.joints.size() * 16)
+    return Status(StatusCode::bad_data,
+                  "skin " + std::to_string(skin_index) + ": inverseBindMatrices must be MAT4, one per joint");
+  for (size_t j = 0; j < skin.joints.size(); ++j)
+    for (int i = 0; i < 16; ++i) inverse_bind[j](i % 4, i / 4) = matrices[j * 16 + size_t(i)];
+  return Status::Ok();
+}
+
+// What sampling a primitive starts from: its rest positions, targets and skin influences (`input`), and `sampled`
+// with its rest attributes and one empty clip per clip of the node, each with the primitive's triangles.
+Status read_primitive(const tinygltf::Model& model, const AnimatedNode& node, size_t p, size_t target_count,
+                      const std::vector<int>* joints, PrimitiveInput& input, SampledPrimitive& sampled) {
+  const tinygltf::Primitive& primitive = model.meshes[size_t(node.mesh)].primitives[p];
+  const std::string what = "mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(p);
+  sampled.primitive = int(p);
+  SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, sampled));
+  input.positions = sampled.rest_positions;
+  input.vertex_count = input.positions.size() / 3;
+  int components = 0;
+  input.deltas.resize(target_count);
+  for (size_t t = 0; t < target_count; ++t) {
+    auto delta = primitive.targets[t].find("POSITION");
+    if (delta == primitive.targets[t].end()) continue;
+    SEGMORPH_RETURN_IF_ERROR(read_floats(model, delta->second, what + " target " + std::to_string(t) + " POSITION",
+                                         input.deltas[t], &components));
+    if (components != 3 || input.deltas[t].size() != input.positions.size())
+      return Status(StatusCode::bad_data,
+                    what + " target " + std::to_string(t) + ": POSITION must be VEC3 with one element per vertex");
+  }
+  if (joints) SEGMORPH_RETURN_IF_ERROR(read_skin_influences(model, primitive, joints->size(), what, input));
+  std::vector<uint32_t> triangles;
+  SEGMORPH_RETURN_IF_ERROR(read_triangles(model, primitive, input.vertex_count, what, triangles));
+  sampled.clips.resize(node.clips.size());
+  for (FrameSequence& sequence : sampled.clips) {
+    sequence.vertex_count = input.vertex_count;
+    sequence.triangles = triangles;
+  }
+  return Status::Ok();
+}
+
+// What every frame of a node's sampling needs: the primitives' inputs, the static weights, the skin's joints and
+// inverse bind matrices.
+struct NodeInputs {
+  std::vector<PrimitiveInput> primitives;
+  std::vector<double> static_weights;
+  const std::vector<int>* joints = nullptr;  // null: not skinned
+  std::vector<Eigen::Matrix4d> inverse_bind;
+};
+
+// What sample_frame computes into, kept from frame to frame.
+struct FrameScratch {
+  std::vector<double> weights, morphed;
+  std::vector<Eigen::Matrix4d> global, joint_matrices;
+};
+
+// The frame at `time` of clip c into every primitive's sequence (frame f): the weights (recorded in clip_weights),
+// the morph targets, then the skin, as glTF applies them.
+void sample_frame(const tinygltf::Model& model, const Scene& scene, const Clip& clip, const Track* weight_track,
+                  const NodeInputs& inputs, size_t c, size_t f, float time, FrameScratch& scratch, SampledNode& out) {
+  std::vector<double>& weights = scratch.weights;
+  std::vector<double>& morphed = scratch.morphed;
+  std::vector<Eigen::Matrix4d>& global = scratch.global;
+  std::vector<Eigen::Matrix4d>& joint_matrices = scratch.joint_matrices;
+  weights.resize(inputs.static_weights.size());
+  if (weight_track)
+    weight_track->curve.evaluate(time, false, weights.data());
+  else
+    weights = inputs.static_weights;
+  out.clip_weights[c].insert(out.clip_weights[c].end(), weights.begin(), weights.end());
+  if (inputs.joints) {
+    evaluate_global_transforms(model, scene.graph, &clip, time, global);
+    joint_matrices.resize(inputs.joints->size());
+    for (size_t j = 0; j < inputs.joints->size(); ++j)
+      joint_matrices[j] = global[size_t((*inputs.joints)[j])] * inputs.inverse_bind[j];
+  }
+  for (size_t p = 0; p < inputs.primitives.size(); ++p) {
+    const PrimitiveInput& input = inputs.primitives[p];
+    const size_t values = input.vertex_count * 3;
+    // Morph first, then skin.
+    morph_positions(input.positions, input.deltas, weights.data(), morphed);
+    float* frame = out.primitives[p].clips[c].frame(f);
+    if (!inputs.joints) {
+      for (size_t i = 0; i < values; ++i) frame[i] = float(morphed[i]);
+      continue;
+    }
+    for (size_t v = 0; v < input.vertex_count; ++v) {
+      const Eigen::Vector4d rest(morphed[v * 3], morphed[v * 3 + 1], morphed[v * 3 + 2], 1.0);
+      Eigen::Vector4d skinned = Eigen::Vector4d::Zero();
+      for (uint32_t i = input.influence_offset[v]; i < input.influence_offset[v + 1]; ++i)
+        skinned += input.influence_weight[i] * (joint_matrices[input.influence_joint[i]] * rest);
+      for (int k = 0; k < 3; ++k) frame[v * 3 + size_t(k)] = float(skinned[k]);
+    }
+  }
+}
+
+// Clip c of the node at its frame times.
+Status sample_clip(const tinygltf::Model& model, const Scene& scene, const AnimatedNode& node,
+                   const SampleSettings& settings, const NodeInputs& inputs, size_t c,
+                   const std::vector<std::vector<float>>* clip_times, SampledNode& out) {
+  const Clip& clip = scene.clips[size_t(node.clips[c])];
+  const std::vector<float> times =
+      clip_times ? (*clip_times)[c] : frame_times(scene, model, node, node.clips[c], settings);
+  const Track* weight_track = nullptr;
+  bool step = true;
+  for_each_moving_track(model, scene.graph, node, clip, [&](const Track& track) {
+    if (track.path == TargetPath::weights) weight_track = &track;
+    step = step && track.curve.interpolation == Interpolation::step;
+  });
+  out.clip_is_step.push_back(step);
+  const size_t target_count = inputs.static_weights.size();
+  if (weight_track && size_t(weight_track->curve.width) != target_count)
+    return Status(StatusCode::bad_data, "animation " + std::to_string(clip.animation) + ": weights of " +
+                                            node_label(model, node.node) + " have " +
+                                            std::to_string(weight_track->curve.width) + " values per key, the mesh " +
+                                            std::to_string(target_count) + " morph targets");
+  for (SampledPrimitive& sampled : out.primitives) {
+    FrameSequence& sequence = sampled.clips[c];
+    sequence.frame_count = times.size();
+    sequence.times = times;
+    sequence.positions.assign(times.size() * sequence.vertex_count * 3, 0.0f);
+  }
+  FrameScratch scratch;
+  for (size_t f = 0; f < times.size(); ++f)
+    sample_frame(model, scene, clip, weight_track, inputs, c, f, times[f], scratch, out);
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status sample_node(const tinygltf::Model& model, const Scene& scene, const AnimatedNode& node,
                    const SampleSettings& settings, SampledNode& out,
                    const std::vector<std::vector<float>>* clip_times) {
   assert(!clip_times || clip_times->size() == node.clips.size());
   out = SampledNode();
   out.node = &node;
-  const tinygltf::Node& gltf_node = model.nodes[size_t(node.node)];
   const tinygltf::Mesh& mesh = model.meshes[size_t(node.mesh)];
   const size_t target_count = mesh.primitives[0].targets.size();
-  const std::string label = node_label(model, node.node);
-
-  // Default morph weights: the node's, else the mesh's, else zeros.
-  std::vector<double> static_weights(target_count, 0.0);
-  const std::vector<double>& defaults = !gltf_node.weights.empty() ? gltf_node.weights : mesh.weights;
-  if (!defaults.empty()) {
-    if (defaults.size() != target_count)
-      return Status(StatusCode::bad_data, label + ": default weights do not match the morph target count");
-    static_weights = defaults;
-  }
-
-  // Inverse bind matrices (identity when absent), column-major.
-  std::vector<Eigen::Matrix4d> inverse_bind;
-  const std::vector<int>* joints = nullptr;
+  NodeInputs inputs;
+  SEGMORPH_RETURN_IF_ERROR(default_weights(model.nodes[size_t(node.node)], mesh, target_count,
+                                           node_label(model, node.node), inputs.static_weights));
   if (node.skin >= 0) {
-    const tinygltf::Skin& skin = model.skins[size_t(node.skin)];
-    joints = &skin.joints;
-    inverse_bind.assign(skin.joints.size(), Eigen::Matrix4d::Identity());
-    if (skin.inverseBindMatrices >= 0) {
-      std::vector<float> matrices;
-      int components = 0;
-      SEGMORPH_RETURN_IF_ERROR(read_floats(model, skin.inverseBindMatrices,
-                                           "skin " + std::to_string(node.skin) + " inverseBindMatrices", matrices,
-                                           &components));
-      if (components != 16 || matrices.size() < skin.joints.size() * 16)
-        return Status(StatusCode::bad_data,
-                      "skin " + std::to_string(node.skin) + ": inverseBindMatrices must be MAT4, one per joint");
-      for (size_t j = 0; j < skin.joints.size(); ++j)
-        for (int i = 0; i < 16; ++i) inverse_bind[j](i % 4, i / 4) = matrices[j * 16 + size_t(i)];
-    }
+    inputs.joints = &model.skins[size_t(node.skin)].joints;
+    SEGMORPH_RETURN_IF_ERROR(inverse_bind_matrices(model, node.skin, inputs.inverse_bind));
   }
-
-  std::vector<PrimitiveInput> inputs(mesh.primitives.size());
+  inputs.primitives.resize(mesh.primitives.size());
   out.clip_weights.resize(node.clips.size());
   out.primitives.resize(mesh.primitives.size());
-  for (size_t p = 0; p < mesh.primitives.size(); ++p) {
-    const tinygltf::Primitive& primitive = mesh.primitives[p];
-    const std::string what = "mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(p);
-    PrimitiveInput& input = inputs[p];
-    SampledPrimitive& sampled = out.primitives[p];
-    sampled.primitive = int(p);
-
-    SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, sampled));
-    input.positions = sampled.rest_positions;
-    input.vertex_count = input.positions.size() / 3;
-    int components = 0;
-
-    input.deltas.resize(target_count);
-    for (size_t t = 0; t < target_count; ++t) {
-      auto delta = primitive.targets[t].find("POSITION");
-      if (delta == primitive.targets[t].end()) continue;
-      SEGMORPH_RETURN_IF_ERROR(read_floats(model, delta->second, what + " target " + std::to_string(t) + " POSITION",
-                                           input.deltas[t], &components));
-      if (components != 3 || input.deltas[t].size() != input.positions.size())
-        return Status(StatusCode::bad_data,
-                      what + " target " + std::to_string(t) + ": POSITION must be VEC3 with one element per vertex");
-    }
-    if (joints) SEGMORPH_RETURN_IF_ERROR(read_skin_influences(model, primitive, joints->size(), what, input));
-
-    std::vector<uint32_t> triangles;
-    SEGMORPH_RETURN_IF_ERROR(read_triangles(model, primitive, input.vertex_count, what, triangles));
-    sampled.clips.resize(node.clips.size());
-    for (FrameSequence& sequence : sampled.clips) {
-      sequence.vertex_count = input.vertex_count;
-      sequence.triangles = triangles;
-    }
-  }
-
-  std::vector<Eigen::Matrix4d> global, joint_matrices;
-  std::vector<double> weights(target_count), morphed;
-  for (size_t c = 0; c < node.clips.size(); ++c) {
-    const Clip& clip = scene.clips[size_t(node.clips[c])];
-    const std::vector<float> times =
-        clip_times ? (*clip_times)[c] : frame_times(scene, model, node, node.clips[c], settings);
-    const Track* weight_track = nullptr;
-    bool step = true;
-    for_each_moving_track(model, scene.graph, node, clip, [&](const Track& track) {
-      if (track.path == TargetPath::weights) weight_track = &track;
-      step = step && track.curve.interpolation == Interpolation::step;
-    });
-    out.clip_is_step.push_back(step);
-    if (weight_track && size_t(weight_track->curve.width) != target_count)
-      return Status(StatusCode::bad_data, "animation " + std::to_string(clip.animation) + ": weights of " + label +
-                                              " have " + std::to_string(weight_track->curve.width) +
-                                              " values per key, the mesh " + std::to_string(target_count) +
-                                              " morph targets");
-
-    for (SampledPrimitive& sampled : out.primitives) {
-      FrameSequence& sequence = sampled.clips[c];
-      sequence.frame_count = times.size();
-      sequence.times = times;
-      sequence.positions.assign(times.size() * sequence.vertex_count * 3, 0.0f);
-    }
-
-    for (size_t f = 0; f < times.size(); ++f) {
-      if (weight_track)
-        weight_track->curve.evaluate(times[f], false, weights.data());
-      else
-        weights = static_weights;
-      out.clip_weights[c].insert(out.clip_weights[c].end(), weights.begin(), weights.end());
-      if (joints) {
-        evaluate_global_transforms(model, scene.graph, &clip, times[f], global);
-        joint_matrices.resize(joints->size());
-        for (size_t j = 0; j < joints->size(); ++j) joint_matrices[j] = global[size_t((*joints)[j])] * inverse_bind[j];
-      }
-      for (size_t p = 0; p < inputs.size(); ++p) {
-        const PrimitiveInput& input = inputs[p];
-        const size_t values = input.vertex_count * 3;
-        // Morph first, then skin.
-        morph_positions(input.positions, input.deltas, weights.data(), morphed);
-        float* frame = out.primitives[p].clips[c].frame(f);
-        if (!joints) {
-          for (size_t i = 0; i < values; ++i) frame[i] = float(morphed[i]);
-          continue;
-        }
-        for (size_t v = 0; v < input.vertex_count; ++v) {
-          const Eigen::Vector4d rest(morphed[v * 3], morphed[v * 3 + 1], morphed[v * 3 + 2], 1.0);
-          Eigen::Vector4d skinned = Eigen::Vector4d::Zero();
-          for (uint32_t i = input.influence_offset[v]; i < input.influence_offset[v + 1]; ++i)
-            skinned += input.influence_weight[i] * (joint_matrices[input.influence_joint[i]] * rest);
-          for (int k = 0; k < 3; ++k) frame[v * 3 + size_t(k)] = float(skinned[k]);
-        }
-      }
-    }
-  }
-  for (size_t p = 0; p < inputs.size(); ++p) out.primitives[p].target_deltas = std::move(inputs[p].deltas);
+  for (size_t p = 0; p < mesh.primitives.size(); ++p)
+    SEGMORPH_RETURN_IF_ERROR(
+        read_primitive(model, node, p, target_count, inputs.joints, inputs.primitives[p], out.primitives[p]));
+  for (size_t c = 0; c < node.clips.size(); ++c)
+    SEGMORPH_RETURN_IF_ERROR(sample_clip(model, scene, node, settings, inputs, c, clip_times, out));
+  for (size_t p = 0; p < inputs.primitives.size(); ++p)
+    out.primitives[p].target_deltas = std::move(inputs.primitives[p].deltas);
   return Status::Ok();
 }
 
