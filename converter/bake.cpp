@@ -114,9 +114,11 @@ int source_node(const tinygltf::Node& node) {
              : -1;
 }
 
-Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled) {
-  // The references this function follows, checked first: decode_compressed_model gets here without
-  // analyze_scene, and analyze_scene checks skins only on nodes with a mesh.
+namespace {
+
+// The references bake_model follows, checked first: decode_compressed_model gets there without analyze_scene, and
+// analyze_scene checks skins only on nodes with a mesh.
+Status check_references(const tinygltf::Model& model) {
   NodeGraph graph;
   SEGMORPH_RETURN_IF_ERROR(build_node_graph(model, graph));
   for (size_t n = 0; n < model.nodes.size(); ++n)
@@ -126,66 +128,74 @@ Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<
     for (int joint : model.skins[s].joints)
       if (joint < 0 || size_t(joint) >= model.nodes.size())
         return Status(StatusCode::bad_data, "skin " + std::to_string(s) + " names a joint that does not exist");
+  return Status::Ok();
+}
 
-  AccessorWriter writer(model);
-  const std::vector<std::vector<bool>> members = scene_members(model);
-  std::vector<int> host(model.nodes.size(), -1);  // original animated node -> node carrying its baked mesh
-  std::vector<bool> baked_skin(model.skins.size(), false);
-  std::vector<size_t> target_count(sampled.size(), 0);
+// What baking the nodes changed, for the channels: the node carrying each original animated node's baked mesh, the
+// skins baked, the number of targets of each sampled node.
+struct Baked {
+  std::vector<int> host;  // original animated node -> node carrying its baked mesh (-1: not baked)
+  std::vector<bool> skin;
+  std::vector<size_t> target_count;
+};
 
-  for (size_t i = 0; i < sampled.size(); ++i) {
-    const AnimatedNode& node = *sampled[i].node;
-    const bool skinned = node.skin >= 0;
-    tinygltf::Mesh mesh = model.meshes[size_t(node.mesh)];
-    mesh.weights.clear();
-    std::vector<tinygltf::Value> names;
-    for (size_t c = 0; c < node.clips.size(); ++c) {
-      const FrameSequence& clip = sampled[i].primitives[0].clips[c];
-      for (size_t f = (c == 0 ? 1 : 0); f < clip.frame_count; ++f)
-        names.emplace_back(scene.clips[size_t(node.clips[c])].name + " frame " + std::to_string(f));
-    }
-    target_count[i] = names.size();
-    mesh.extras = with_member(mesh.extras, "targetNames", tinygltf::Value(names));
-    for (size_t p = 0; p < mesh.primitives.size(); ++p)
-      mesh.primitives[p] = bake_primitive(mesh.primitives[p], sampled[i].primitives[p], skinned, writer);
-    model.meshes.push_back(std::move(mesh));
-    const int mesh_index = int(model.meshes.size()) - 1;
-
-    // Where the node came from, unless it already says (a decoded file keeps the original's index).
-    const tinygltf::Value& existing = model.nodes[size_t(node.node)].extras;
-    tinygltf::Value::Object provenance;
-    provenance["source_node"] = tinygltf::Value(node.node);
-    if (existing.IsObject() && existing.Has("segmorph") && existing.Get("segmorph").IsObject())
-      provenance = existing.Get("segmorph").Get<tinygltf::Value::Object>();
-    if (skinned) {
-      // Skinned vertices are in model space: the baked mesh hangs from a new root with no transform.
-      tinygltf::Node baked;
-      baked.name = model.nodes[size_t(node.node)].name;
-      baked.mesh = mesh_index;
-      baked.extras = with_member(baked.extras, "segmorph", tinygltf::Value(provenance));
-      tinygltf::Node& original = model.nodes[size_t(node.node)];
-      original.mesh = -1;
-      original.skin = -1;
-      original.weights.clear();
-      model.nodes.push_back(std::move(baked));
-      host.push_back(-1);
-      host[size_t(node.node)] = int(model.nodes.size()) - 1;
-      for (size_t s = 0; s < model.scenes.size(); ++s)
-        if (members[s][size_t(node.node)]) model.scenes[s].nodes.push_back(host[size_t(node.node)]);
-      baked_skin[size_t(node.skin)] = true;
-    } else {
-      tinygltf::Node& original = model.nodes[size_t(node.node)];
-      original.mesh = mesh_index;
-      original.weights.clear();
-      original.extras = with_member(original.extras, "segmorph", tinygltf::Value(provenance));
-      host[size_t(node.node)] = node.node;
-    }
+// Bakes sampled node i: a new mesh of morph targets, named after the clips' frames; a skinned node's goes on a new
+// root node (skinned vertices are in model space), an unskinned node's stays on the node.
+void bake_node(tinygltf::Model& model, const Scene& scene, const SampledNode& sampled, size_t i,
+               const std::vector<std::vector<bool>>& members, AccessorWriter& writer, Baked& baked) {
+  const AnimatedNode& node = *sampled.node;
+  const bool skinned = node.skin >= 0;
+  tinygltf::Mesh mesh = model.meshes[size_t(node.mesh)];
+  mesh.weights.clear();
+  std::vector<tinygltf::Value> names;
+  for (size_t c = 0; c < node.clips.size(); ++c) {
+    const FrameSequence& clip = sampled.primitives[0].clips[c];
+    for (size_t f = (c == 0 ? 1 : 0); f < clip.frame_count; ++f)
+      names.emplace_back(scene.clips[size_t(node.clips[c])].name + " frame " + std::to_string(f));
   }
+  baked.target_count[i] = names.size();
+  mesh.extras = with_member(mesh.extras, "targetNames", tinygltf::Value(names));
+  for (size_t p = 0; p < mesh.primitives.size(); ++p)
+    mesh.primitives[p] = bake_primitive(mesh.primitives[p], sampled.primitives[p], skinned, writer);
+  model.meshes.push_back(std::move(mesh));
+  const int mesh_index = int(model.meshes.size()) - 1;
 
-  // Nodes whose transforms still matter: they or a descendant carry a mesh, camera or extension, or are
-  // joints of a skin still in use. Joints of baked skins that matter to nothing lose their channels.
-  std::vector<bool> needed(model.nodes.size(), false), live_joint(model.nodes.size(), false),
-      baked_joint(model.nodes.size(), false);
+  // Where the node came from, unless it already says (a decoded file keeps the original's index).
+  const tinygltf::Value& existing = model.nodes[size_t(node.node)].extras;
+  tinygltf::Value::Object provenance;
+  provenance["source_node"] = tinygltf::Value(node.node);
+  if (existing.IsObject() && existing.Has("segmorph") && existing.Get("segmorph").IsObject())
+    provenance = existing.Get("segmorph").Get<tinygltf::Value::Object>();
+  if (!skinned) {
+    tinygltf::Node& original = model.nodes[size_t(node.node)];
+    original.mesh = mesh_index;
+    original.weights.clear();
+    original.extras = with_member(original.extras, "segmorph", tinygltf::Value(provenance));
+    baked.host[size_t(node.node)] = node.node;
+    return;
+  }
+  tinygltf::Node host;
+  host.name = model.nodes[size_t(node.node)].name;
+  host.mesh = mesh_index;
+  host.extras = with_member(host.extras, "segmorph", tinygltf::Value(provenance));
+  tinygltf::Node& original = model.nodes[size_t(node.node)];
+  original.mesh = -1;
+  original.skin = -1;
+  original.weights.clear();
+  model.nodes.push_back(std::move(host));
+  baked.host.push_back(-1);
+  baked.host[size_t(node.node)] = int(model.nodes.size()) - 1;
+  for (size_t s = 0; s < model.scenes.size(); ++s)
+    if (members[s][size_t(node.node)]) model.scenes[s].nodes.push_back(baked.host[size_t(node.node)]);
+  baked.skin[size_t(node.skin)] = true;
+}
+
+// Nodes whose transforms still matter: they or a descendant carry a mesh, camera or extension, or are joints of a
+// skin still in use. `baked_joint`: the joints of baked skins.
+std::vector<bool> needed_nodes(const tinygltf::Model& model, const std::vector<bool>& baked_skin,
+                               std::vector<bool>& baked_joint) {
+  std::vector<bool> needed(model.nodes.size(), false), live_joint(model.nodes.size(), false);
+  baked_joint.assign(model.nodes.size(), false);
   for (const tinygltf::Node& node : model.nodes)
     if (node.skin >= 0)
       for (int joint : model.skins[size_t(node.skin)].joints) live_joint[size_t(joint)] = true;
@@ -200,14 +210,49 @@ Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<
     if (node.mesh >= 0 || node.camera >= 0 || !node.extensions.empty() || live_joint[n])
       for (int m = int(n); m >= 0 && !needed[size_t(m)]; m = parent[size_t(m)]) needed[size_t(m)] = true;
   }
+  return needed;
+}
 
+// Clip c of sampled node i as a weights channel of its animation: one-hot sparse weights on the clip's targets.
+tinygltf::AnimationChannel clip_channel(tinygltf::Animation& animation, const SampledNode& sampled, size_t c,
+                                        size_t targets, int host, AccessorWriter& writer) {
+  const FrameSequence& clip = sampled.primitives[0].clips[c];
+  // Target of frame f of this clip: frames of earlier clips come first; the node's very first frame is the base.
+  size_t first_target = 0;
+  for (size_t d = 0; d < c; ++d) first_target += sampled.primitives[0].clips[d].frame_count;
+  std::vector<uint32_t> indices;
+  std::vector<float> ones;
+  for (size_t f = 0; f < clip.frame_count; ++f) {
+    if (c == 0 && f == 0) continue;
+    indices.push_back(uint32_t(f * targets + first_target + f - 1));
+    ones.push_back(1.0f);
+  }
+  tinygltf::AnimationSampler sampler;
+  sampler.input = writer.add_floats(clip.times.data(), clip.frame_count, TINYGLTF_TYPE_SCALAR, true, 0);
+  sampler.output = indices.empty() ? writer.add_zeros(clip.frame_count * targets, TINYGLTF_TYPE_SCALAR, false)
+                                   : writer.add_sparse_floats(clip.frame_count * targets, TINYGLTF_TYPE_SCALAR, indices, ones);
+  sampler.interpolation = sampled.clip_is_step[c] ? "STEP" : "LINEAR";
+  animation.samplers.push_back(sampler);
+  tinygltf::AnimationChannel channel;
+  channel.sampler = int(animation.samplers.size()) - 1;
+  channel.target_node = host;
+  channel.target_path = "weights";
+  return channel;
+}
+
+// Each animation: the weights channels of baked nodes and the channels of joints that matter to nothing go; each
+// clip of a baked node becomes a weights channel on its host.
+void rebuild_channels(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled,
+                      const Baked& baked, AccessorWriter& writer) {
+  std::vector<bool> baked_joint;
+  const std::vector<bool> needed = needed_nodes(model, baked.skin, baked_joint);
   for (size_t a = 0; a < model.animations.size(); ++a) {
     tinygltf::Animation& animation = model.animations[a];
     std::vector<tinygltf::AnimationChannel> channels;
     for (const tinygltf::AnimationChannel& channel : animation.channels) {
       const int n = channel.target_node;
-      const bool valid = n >= 0 && size_t(n) < host.size();
-      if (valid && channel.target_path == "weights" && host[size_t(n)] >= 0) continue;  // replaced below
+      const bool valid = n >= 0 && size_t(n) < baked.host.size();
+      if (valid && channel.target_path == "weights" && baked.host[size_t(n)] >= 0) continue;  // replaced below
       if (valid && channel.target_path != "weights" && baked_joint[size_t(n)] && !needed[size_t(n)]) continue;
       channels.push_back(channel);
     }
@@ -215,35 +260,27 @@ Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<
       const AnimatedNode& node = *sampled[i].node;
       for (size_t c = 0; c < node.clips.size(); ++c) {
         if (size_t(scene.clips[size_t(node.clips[c])].animation) != a) continue;
-        const FrameSequence& clip = sampled[i].primitives[0].clips[c];
-        const size_t targets = target_count[i];
-        if (targets == 0) continue;  // a single frame: nothing to play
-        // Target of frame f of this clip: frames of earlier clips come first; the node's very first frame is the base.
-        size_t first_target = 0;
-        for (size_t d = 0; d < c; ++d) first_target += sampled[i].primitives[0].clips[d].frame_count;
-        std::vector<uint32_t> indices;
-        std::vector<float> ones;
-        for (size_t f = 0; f < clip.frame_count; ++f) {
-          if (c == 0 && f == 0) continue;
-          indices.push_back(uint32_t(f * targets + first_target + f - 1));
-          ones.push_back(1.0f);
-        }
-        tinygltf::AnimationSampler sampler;
-        sampler.input = writer.add_floats(clip.times.data(), clip.frame_count, TINYGLTF_TYPE_SCALAR, true, 0);
-        sampler.output = indices.empty()
-                             ? writer.add_zeros(clip.frame_count * targets, TINYGLTF_TYPE_SCALAR, false)
-                             : writer.add_sparse_floats(clip.frame_count * targets, TINYGLTF_TYPE_SCALAR, indices, ones);
-        sampler.interpolation = sampled[i].clip_is_step[c] ? "STEP" : "LINEAR";
-        animation.samplers.push_back(sampler);
-        tinygltf::AnimationChannel channel;
-        channel.sampler = int(animation.samplers.size()) - 1;
-        channel.target_node = host[size_t(node.node)];
-        channel.target_path = "weights";
-        channels.push_back(channel);
+        if (baked.target_count[i] == 0) continue;  // a single frame: nothing to play
+        channels.push_back(
+            clip_channel(animation, sampled[i], c, baked.target_count[i], baked.host[size_t(node.node)], writer));
       }
     }
     animation.channels = std::move(channels);
   }
+}
+
+}  // namespace
+
+Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled) {
+  SEGMORPH_RETURN_IF_ERROR(check_references(model));
+  AccessorWriter writer(model);
+  const std::vector<std::vector<bool>> members = scene_members(model);
+  Baked baked;
+  baked.host.assign(model.nodes.size(), -1);
+  baked.skin.assign(model.skins.size(), false);
+  baked.target_count.assign(sampled.size(), 0);
+  for (size_t i = 0; i < sampled.size(); ++i) bake_node(model, scene, sampled[i], i, members, writer, baked);
+  rebuild_channels(model, scene, sampled, baked, writer);
   return Status::Ok();
 }
 
