@@ -148,4 +148,54 @@ bool declares_extension(const tinygltf::Model& model, const std::string& name) {
   return std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), name) != model.extensionsUsed.end();
 }
 
+Status read_compressed_mesh(const tinygltf::Model& model, size_t m, std::vector<CompressedPrimitive>& primitives,
+                            int& node) {
+  primitives.clear();
+  node = -1;
+  for (const tinygltf::Primitive& primitive : model.meshes[m].primitives) {
+    auto it = primitive.extensions.find(kExtensionName);
+    if (it == primitive.extensions.end()) continue;
+    primitives.emplace_back();
+    SEGMORPH_RETURN_IF_ERROR(parse_compressed_primitive(it->second, primitives.back()));
+  }
+  if (primitives.empty()) return Status::Ok();
+  const std::string what = "mesh " + std::to_string(m);
+  if (primitives.size() != model.meshes[m].primitives.size())
+    return Status(StatusCode::bad_data, what + ": some primitives are compressed and some are not");
+  for (const tinygltf::Primitive& primitive : model.meshes[m].primitives)
+    if (primitive.mode != -1 && primitive.mode != TINYGLTF_MODE_TRIANGLES)
+      return Status(StatusCode::bad_data, what + ": a compressed primitive must be a triangle list (mode 4)");
+  for (const tinygltf::Node& user : model.nodes)
+    if (user.mesh == int(m) && user.skin >= 0)
+      return Status(StatusCode::bad_data, what + ": the node of a compressed mesh must not have a skin");
+  const bool targets = primitives[0].morph_targets;
+  for (const CompressedPrimitive& other : primitives)
+    if (other.morph_targets != targets)
+      return Status(StatusCode::bad_data, what + ": some primitives keep morph targets and some play clips");
+  if (targets) return Status::Ok();
+  std::vector<int> users;
+  for (size_t n = 0; n < model.nodes.size(); ++n)
+    if (model.nodes[n].mesh == int(m)) users.push_back(int(n));
+  if (users.size() != 1)
+    return Status(StatusCode::bad_data, what + ": a compressed mesh must be used by exactly one node");
+  std::vector<int> animations;
+  for (const CompressedClip& clip : primitives[0].clips) {
+    if (size_t(clip.animation) >= model.animations.size())
+      return Status(StatusCode::bad_data, what + ": a clip names an animation that does not exist");
+    if (std::find(animations.begin(), animations.end(), clip.animation) != animations.end())
+      return Status(StatusCode::bad_data, what + ": two clips name the same animation");
+    animations.push_back(clip.animation);
+  }
+  // Rule 2: every primitive of the mesh has the same clips (each its own times).
+  for (const CompressedPrimitive& other : primitives) {
+    bool same = other.clips.size() == primitives[0].clips.size();
+    for (size_t c = 0; same && c < other.clips.size(); ++c)
+      same = other.clips[c].animation == primitives[0].clips[c].animation &&
+             other.clips[c].step == primitives[0].clips[c].step;
+    if (!same) return Status(StatusCode::bad_data, what + ": its primitives disagree on the clips");
+  }
+  node = users[0];
+  return Status::Ok();
+}
+
 }  // namespace segmorph

@@ -63,6 +63,14 @@ tinygltf::Value draco_primitive_value(const DracoPrimitive& primitive);
 tinygltf::Value compressed_animation_value(const CompressedAnimation& animation);
 tinygltf::Value placeholder_value();
 
+// The compressed primitives of mesh `mesh` (empty when it has none), parsed and checked against spec/README.md's
+// validity rules about a mesh: every primitive compressed, each a triangle list (rule 1); all keeping morph targets or
+// all playing the same clips (rule 2); a mesh that plays clips used by exactly one node, no node using it skinned
+// (rule 3); each clip's animation existing and named once (rule 6). `node`: the one node of a mesh that plays clips
+// (-1 for kept targets).
+Status read_compressed_mesh(const tinygltf::Model& model, size_t mesh, std::vector<CompressedPrimitive>& primitives,
+                            int& node);
+
 // Adds `name` to extensionsUsed (and extensionsRequired when `required`), once; or removes it from both.
 void declare_extension(tinygltf::Model& model, const std::string& name, bool required);
 void undeclare_extension(tinygltf::Model& model, const std::string& name);

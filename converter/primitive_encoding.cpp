@@ -1,0 +1,148 @@
+#include "primitive_encoding.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "compressed.h"
+#include "metrics.h"
+
+namespace segmorph {
+namespace {
+
+// Draco position bits when none are given: the base mesh's quantization step (its largest extent over 2^bits)
+// about kBaseStepRatio times the residual step the error target implies, and at least kMinPositionBits. The
+// animation's closed loop corrects the base mesh's error in every frame, so the base need not be much finer
+// than the residuals, while a coarser base costs residual bits in every frame: measured on the three
+// sequences at KG 0.5, 0.15 and 0.03 % (docs/codec.md), the best whole file is within a bit of this choice.
+// Rate targets and lossless streams keep Draco's usual 14 bits.
+constexpr int kMinPositionBits = 12, kMaxPositionBits = 24, kDefaultPositionBits = 14;
+constexpr double kBaseStepRatio = 0.25;
+}  // namespace
+
+int automatic_position_bits(const std::vector<float>& positions, const std::vector<FrameSequence>& clips,
+                            const CodecSettings& settings) {
+  if (settings.mode != RateMode::error || positions.empty()) return kDefaultPositionBits;
+  float low[3], high[3];
+  bounding_box(positions.data(), positions.size() / 3, low, high);
+  const double extent = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
+  const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio;
+  if (!(extent > 0) || !(step > 0)) return kDefaultPositionBits;
+  const double bits = std::round(std::log2(extent / step + 1));
+  return int(std::clamp(bits, double(kMinPositionBits), double(kMaxPositionBits)));
+}
+
+
+// Reads every attribute of `primitive` (POSITION first) and its triangles into a base mesh.
+Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                      const std::vector<uint32_t>& triangles, size_t vertex_count, const std::string& what,
+                      BaseMesh& base) {
+  base = BaseMesh();
+  base.vertex_count = vertex_count;
+  base.triangles = triangles;
+  for (const auto& [semantic, accessor] : primitive.attributes) {
+    BaseMeshAttribute attribute;
+    attribute.semantic = semantic;
+    SEGMORPH_RETURN_IF_ERROR(
+        read_floats(model, accessor, what + " " + semantic, attribute.values, &attribute.components));
+    if (semantic == "POSITION")
+      base.attributes.insert(base.attributes.begin(), std::move(attribute));
+    else
+      base.attributes.push_back(std::move(attribute));
+  }
+  return Status::Ok();
+}
+
+// Compresses the base mesh, its copies of a vertex merged (merge_copies over `frames`), and finds which original
+// vertex each vertex Draco gives back stands for; adds the time taken to `milliseconds`.
+Status encode_base(const BaseMesh& base, const std::vector<FrameSequence>& frames, PrimitiveEncoding& out,
+                   double& milliseconds) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<uint32_t> first;
+  const BaseMesh merged = merge_copies(base, frames, first);
+  SEGMORPH_RETURN_IF_ERROR(encode_draco_base_mesh(merged, out.draco, out.draco_bytes, out.draco_primitive.attributes));
+  SEGMORPH_RETURN_IF_ERROR(decode_draco_base_mesh(out.draco_bytes.data(), out.draco_bytes.size(),
+                                                  out.draco_primitive.attributes, out.decoded));
+  // Draco's edgebreaker reorders vertices and may merge duplicates; each decoded vertex follows the original it
+  // came from.
+  SEGMORPH_RETURN_IF_ERROR(match_decoded_vertices(merged, out.decoded, out.draco, out.source));
+  for (uint32_t& source : out.source) source = first[source];
+  milliseconds += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return Status::Ok();
+}
+
+// `clips` with their vertices in the order the decoder gets back from Draco.
+std::vector<FrameSequence> in_decoded_order(const std::vector<FrameSequence>& clips, const PrimitiveEncoding& encoding) {
+  const BaseMesh& decoded = encoding.decoded;
+  std::vector<FrameSequence> reordered(clips.size());
+  for (size_t c = 0; c < clips.size(); ++c) {
+    const FrameSequence& clip = clips[c];
+    FrameSequence& out = reordered[c];
+    out.vertex_count = decoded.vertex_count;
+    out.frame_count = clip.frame_count;
+    out.times = clip.times;
+    out.triangles = decoded.triangles;
+    out.positions.resize(clip.frame_count * decoded.vertex_count * 3);
+    for (size_t f = 0; f < clip.frame_count; ++f)
+      for (size_t v = 0; v < decoded.vertex_count; ++v)
+        for (int k = 0; k < 3; ++k)
+          out.positions[(f * decoded.vertex_count + v) * 3 + size_t(k)] =
+              clip.frame(f)[size_t(encoding.source[v]) * 3 + size_t(k)];
+  }
+  return reordered;
+}
+
+// Encodes `reordered` against the decoded base positions, then decodes the stream as a reader will (a few tens of
+// milliseconds) and refuses a stream that does not give back the encoder's own reconstruction.
+Status encode_stream(const std::vector<FrameSequence>& reordered, const CodecSettings& settings,
+                     const std::string& what, PrimitiveEncoding& encoding) {
+  const BaseMesh& decoded = encoding.decoded;
+  encoding.report = StreamReport();
+  SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, settings, encoding.stream,
+                                            &encoding.report, &encoding.reconstruction));
+  std::vector<FrameSequence> check;
+  const Status check_status = decode_animation(encoding.stream.data(), encoding.stream.size(),
+                                               decoded.attributes[0].values, decoded.triangles, check);
+  bool same = check_status.ok() && check.size() == encoding.reconstruction.size();
+  for (size_t c = 0; same && c < check.size(); ++c) same = check[c].positions == encoding.reconstruction[c].positions;
+  if (!same)
+    return Status(StatusCode::internal, what + ": the animation stream does not decode to the encoder's frames (" +
+                                            (check_status.ok() ? "different frames" : check_status.message()) +
+                                            "); this is a segmorph bug, please report it");
+  return Status::Ok();
+}
+
+// The written primitive: attribute accessors without data (Draco holds it), the two extensions.
+tinygltf::Primitive encoded_primitive(const tinygltf::Primitive& original, const PrimitiveEncoding& encoding,
+                                      CompressedPrimitive compressed, AccessorWriter& writer) {
+  const BaseMesh& decoded = encoding.decoded;
+  tinygltf::Primitive out;
+  out.material = original.material;
+  out.mode = TINYGLTF_MODE_TRIANGLES;
+  out.extras = original.extras;
+  out.extensions = original.extensions;
+  for (const BaseMeshAttribute& attribute : decoded.attributes) {
+    const int type = type_of_components(attribute.components);
+    // The data is Draco's; POSITION keeps its bounds, as glTF requires.
+    out.attributes[attribute.semantic] =
+        attribute.semantic == "POSITION" ? writer.add_described(attribute.values.data(), decoded.vertex_count, type)
+                                         : writer.add_zeros(decoded.vertex_count, type, false);
+  }
+  out.indices = writer.add_described_indices(decoded.triangles.size(), decoded.vertex_count);
+  DracoPrimitive draco = encoding.draco_primitive;
+  draco.buffer_view = writer.add_view(encoding.draco_bytes.data(), encoding.draco_bytes.size(), 0);
+  out.extensions[kDracoExtensionName] = draco_primitive_value(draco);
+  compressed.buffer_view = writer.add_view(encoding.stream.data(), encoding.stream.size(), 0);
+  out.extensions[kExtensionName] = compressed_primitive_value(compressed);
+  return out;
+}
+
+// Morph target displacements from decoded target frames: frame − base, as the decoder writes them.
+std::vector<std::vector<float>> target_displacements(const FrameSequence& frames, const std::vector<float>& base) {
+  std::vector<std::vector<float>> deltas(frames.frame_count, std::vector<float>(base.size()));
+  for (size_t t = 0; t < frames.frame_count; ++t)
+    for (size_t i = 0; i < base.size(); ++i) deltas[t][i] = frames.frame(t)[i] - base[i];
+  return deltas;
+}
+
+}  // namespace segmorph
