@@ -50,19 +50,8 @@ FrameLoop::FrameLoop(const StreamContent& content, const std::vector<float>& bas
       row_(size_t(content.welded_count) * 3),
       predictions_(2 * row_),
       symbols_(2 * row_),
-      welded_frames_(2 * row_) {
-  const size_t vertex_count = content.vertex_count;
-  bool long_runs = true;
-  for (size_t v = 0; v < vertex_count && long_runs; ++v) {
-    const size_t w = content.welded_index[v];
-    if (!runs_.empty() && runs_.back().welded + runs_.back().count == w)
-      ++runs_.back().count;
-    else
-      runs_.push_back({w, 1});
-    long_runs = runs_.size() * 8 <= vertex_count;
-  }
-  if (!long_runs) runs_.clear();
-}
+      welded_frames_(2 * row_),
+      to_vertices_(content.welded_index) {}
 
 void FrameLoop::start_clip() { reconstructor_.start_clip(); }
 
@@ -91,43 +80,17 @@ Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two
 
 bool FrameLoop::finite(size_t slot) const { return all_finite(&welded_frames_[slot * row_], row_); }
 
-void FrameLoop::write(size_t slot, float* out) const {
-  const float* frame = &welded_frames_[slot * row_];
-  if (!runs_.empty()) {
-    for (const Run& run : runs_) {
-      std::memcpy(out, frame + run.welded * 3, run.count * 3 * sizeof(float));
-      out += run.count * 3;
-    }
-    return;
-  }
-  for (size_t v = 0; v < content_.vertex_count; ++v) {
-    const float* in = &frame[size_t(content_.welded_index[v]) * 3];
-    out[v * 3] = in[0], out[v * 3 + 1] = in[1], out[v * 3 + 2] = in[2];
-  }
-}
-
-void FrameLoop::append(size_t slot, std::vector<float>& out) const {
-  const float* frame = &welded_frames_[slot * row_];
-  if (!runs_.empty()) {
-    for (const Run& run : runs_) out.insert(out.end(), frame + run.welded * 3, frame + (run.welded + run.count) * 3);
-    return;
-  }
-  const size_t at = out.size();
-  out.resize(at + size_t(content_.vertex_count) * 3);
-  write(slot, &out[at]);
-}
-
 Status FrameLoop::decode(size_t frame, const Residuals& residuals, float* first, float* second) {
   SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, second != nullptr));
-  write(0, first);
-  if (second) write(1, second);
+  to_vertices_.gather(&welded_frames_[0], first);
+  if (second) to_vertices_.gather(&welded_frames_[row_], second);
   return Status::Ok();
 }
 
 Status FrameLoop::decode_append(size_t frame, const Residuals& residuals, bool two, std::vector<float>& out) {
   SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, two));
-  append(0, out);
-  if (two) append(1, out);
+  to_vertices_.append(&welded_frames_[0], out);
+  if (two) to_vertices_.append(&welded_frames_[row_], out);
   return Status::Ok();
 }
 

@@ -18,6 +18,7 @@
 #include "segmentation.h"
 #include "stream_format.h"
 #include "topology.h"
+#include "vertex_gather.h"
 
 namespace segmorph {
 namespace {
@@ -49,20 +50,11 @@ Status check_input(const std::vector<FrameSequence>& clips, const std::vector<fl
 
 }  // namespace
 
-// ‖A − E(A)‖²_F over the original vertices of every frame (the KG error's denominator).
+// ‖A − E(A)‖²_F over the original vertices of every frame (the KG error's denominator, as ErrorAccumulator sums it).
 double frame_spread(const std::vector<FrameSequence>& clips) {
   double spread = 0;
   for (const FrameSequence& clip : clips)
-    for (size_t f = 0; f < clip.frame_count; ++f) {
-      const float* frame = clip.frame(f);
-      double centroid[3] = {0, 0, 0};
-      for (size_t v = 0; v < clip.vertex_count; ++v)
-        for (int c = 0; c < 3; ++c) centroid[c] += frame[v * 3 + size_t(c)];
-      for (double& c : centroid) c /= double(clip.vertex_count);
-      for (size_t v = 0; v < clip.vertex_count; ++v)
-        for (int c = 0; c < 3; ++c)
-          spread += (frame[v * 3 + size_t(c)] - centroid[c]) * (frame[v * 3 + size_t(c)] - centroid[c]);
-    }
+    for (size_t f = 0; f < clip.frame_count; ++f) add_frame_spread(clip.frame(f), clip.vertex_count, spread);
   return spread;
 }
 
@@ -143,6 +135,7 @@ std::vector<FrameSequence> restored_clips(const EncodeProblem& p, const std::vec
                                           double& kg_percent) {
   std::vector<FrameSequence> restored(p.clips.size());
   ErrorAccumulator accumulator;
+  const VertexGather to_vertices(p.topology.welded_index);
   size_t frame = 0;
   for (size_t c = 0; c < p.clips.size(); ++c) {
     FrameSequence& clip = restored[c];
@@ -152,10 +145,7 @@ std::vector<FrameSequence> restored_clips(const EncodeProblem& p, const std::vec
     clip.triangles = p.clips[c].triangles;
     clip.positions.resize(clip.frame_count * p.vertex_count * 3);
     for (size_t f = 0; f < clip.frame_count; ++f, ++frame)
-      for (size_t v = 0; v < p.vertex_count; ++v)
-        for (int a = 0; a < 3; ++a)
-          clip.positions[(f * p.vertex_count + v) * 3 + size_t(a)] =
-              decoded[(frame * p.welded + p.topology.welded_index[v]) * 3 + size_t(a)];
+      to_vertices.gather(&decoded[frame * p.welded * 3], clip.frame(f));
     accumulator.add(p.clips[c], clip);
   }
   kg_percent = accumulator.result().kg_percent;

@@ -13,6 +13,7 @@
 #include "reconstruction.h"
 #include "segmorph/status.h"
 #include "stream.h"
+#include "vertex_gather.h"
 
 namespace segmorph {
 
@@ -41,8 +42,6 @@ class FrameLoop {
  private:
   Status reconstruct(size_t frame, const Residuals& residuals, bool two);
   bool finite(size_t slot) const;
-  void write(size_t slot, float* out) const;
-  void append(size_t slot, std::vector<float>& out) const;
 
   const StreamContent& content_;
   std::vector<float> welded_;
@@ -57,12 +56,7 @@ class FrameLoop {
   std::vector<double> predictions_;
   std::vector<int64_t> symbols_;
   std::vector<float> welded_frames_;
-  // Vertices v, v + 1, ... whose welded vertices are w, w + 1, ... (usually few and long): a frame is copied out run
-  // by run. Empty when runs are short (then vertex by vertex).
-  struct Run {
-    size_t welded, count;
-  };
-  std::vector<Run> runs_;
+  VertexGather to_vertices_;  // welded frames into the base mesh's vertex order
 };
 
 // A stream decoded frame by frame in stream order (clip after clip), with the frames written where the caller says:

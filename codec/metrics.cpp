@@ -15,13 +15,29 @@ void bounding_box(const float* positions, size_t vertex_count, float low[3], flo
     }
 }
 
-double bounding_box_diagonal(const float* positions, size_t vertex_count) {
+double bounding_box_diagonal_squared(const float* positions, size_t vertex_count) {
   if (vertex_count == 0) return 0;
   float low[3], high[3];
   bounding_box(positions, vertex_count, low, high);
   double squared = 0;
   for (int c = 0; c < 3; ++c) squared += (double(high[c]) - low[c]) * (double(high[c]) - low[c]);
-  return std::sqrt(squared);
+  return squared;
+}
+
+double bounding_box_diagonal(const float* positions, size_t vertex_count) {
+  return std::sqrt(bounding_box_diagonal_squared(positions, vertex_count));
+}
+
+void add_frame_spread(const float* frame, size_t vertex_count, double& spread) {
+  double centroid[3] = {0, 0, 0};
+  for (size_t v = 0; v < vertex_count; ++v)
+    for (int c = 0; c < 3; ++c) centroid[c] += frame[v * 3 + size_t(c)];
+  for (double& c : centroid) c /= double(std::max<size_t>(vertex_count, 1));
+  for (size_t v = 0; v < vertex_count; ++v)
+    for (int c = 0; c < 3; ++c) {
+      const double s = double(frame[v * 3 + size_t(c)]) - centroid[c];
+      spread += s * s;
+    }
 }
 
 void ErrorAccumulator::add(const FrameSequence& original, const FrameSequence& decoded) {
@@ -33,18 +49,13 @@ void ErrorAccumulator::add(const FrameSequence& original, const FrameSequence& d
   for (size_t f = 0; f < original.frame_count; ++f) {
     const float* a = original.frame(f);
     const float* b = decoded.frame(f);
-    double centroid[3] = {0, 0, 0};
-    for (size_t v = 0; v < vertex_count; ++v)
-      for (int c = 0; c < 3; ++c) centroid[c] += a[v * 3 + size_t(c)];
-    for (double& c : centroid) c /= double(std::max<size_t>(vertex_count, 1));
+    add_frame_spread(a, vertex_count, spread_squared_);
     double frame_error = 0;
     for (size_t v = 0; v < vertex_count; ++v) {
       double distance_squared = 0;
       for (int c = 0; c < 3; ++c) {
         const double d = double(a[v * 3 + size_t(c)]) - double(b[v * 3 + size_t(c)]);
-        const double s = double(a[v * 3 + size_t(c)]) - centroid[c];
         distance_squared += d * d;
-        spread_squared_ += s * s;
       }
       frame_error += distance_squared;
       max_error_ = std::max(max_error_, std::sqrt(distance_squared));

@@ -17,6 +17,12 @@ void bounding_box(const float* positions, size_t vertex_count, float low[3], flo
 
 // Length of the diagonal of the axis-aligned bounding box of V × 3 positions (0 when V = 0).
 double bounding_box_diagonal(const float* positions, size_t vertex_count);
+// Its square, computed without the square root (E(Π) divides by it).
+double bounding_box_diagonal_squared(const float* positions, size_t vertex_count);
+
+// Adds one frame's ‖A − E(A)‖² (V × 3 positions: the squared distances from its centroid, in double, vertex by vertex
+// and axis by axis) to `spread`: the KG error's denominator, summed over frames.
+void add_frame_spread(const float* frame, size_t vertex_count, double& spread);
 
 struct ErrorMetrics {
   size_t vertices = 0;            // V

@@ -5,6 +5,8 @@
 #include <cassert>
 #include <cmath>
 
+#include "metrics.h"
+
 namespace segmorph {
 namespace {
 
@@ -101,15 +103,7 @@ double motion_compensation_error(const float* base, const Trajectories& frames, 
       for (int c = 0; c < 3; ++c) sum += (y[c] - frame[v * 3 + size_t(c)]) * (y[c] - frame[v * 3 + size_t(c)]);
     }
   }
-  // The base's bounding-box diagonal, squared.
-  double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (size_t v = 0; v < frames.vertex_count; ++v)
-    for (int c = 0; c < 3; ++c) {
-      low[c] = std::min(low[c], double(base[v * 3 + size_t(c)]));
-      high[c] = std::max(high[c], double(base[v * 3 + size_t(c)]));
-    }
-  double diagonal_squared = 0;
-  for (int c = 0; c < 3; ++c) diagonal_squared += (high[c] - low[c]) * (high[c] - low[c]);
+  const double diagonal_squared = bounding_box_diagonal_squared(base, frames.vertex_count);
   const double count = double(frames.vertex_count) * double(frames.frame_count);
   return count > 0 && diagonal_squared > 0 ? sum / (count * diagonal_squared) : 0.0;
 }

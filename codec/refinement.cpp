@@ -127,15 +127,7 @@ Clusters refine_by_motion(const Clusters& clusters, const float* base, const Tra
       moved += label[v] != refined.label[v];
     }
     // Clusters emptied by the moves disappear; labels are renumbered in order of first appearance.
-    std::vector<uint32_t> number(refined.count, UINT32_MAX);
-    Clusters next;
-    next.label.resize(vertex_count);
-    for (size_t v = 0; v < vertex_count; ++v) {
-      uint32_t& n = number[label[v]];
-      if (n == UINT32_MAX) n = uint32_t(next.count++);
-      next.label[v] = n;
-    }
-    refined = std::move(next);
+    refined = compact(label);
     if (moved == 0) break;
   }
   if (iterations_out) *iterations_out = iterations;

@@ -72,7 +72,8 @@ struct FitStatistics {
   }
 };
 
-// Renumbers labels to 0..K−1 in order of first appearance.
+}  // namespace
+
 Clusters compact(const std::vector<uint32_t>& label) {
   Clusters clusters;
   std::vector<uint32_t> number(label.size(), UINT32_MAX);
@@ -85,7 +86,6 @@ Clusters compact(const std::vector<uint32_t>& label) {
   return clusters;
 }
 
-}  // namespace
 
 Clusters clusters_from_levels(const std::vector<double>& mu, const WeldedTopology& topology,
                               const VertexAdjacency& adjacency, const MorseBands& bands,

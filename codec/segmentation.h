@@ -40,4 +40,8 @@ Clusters clusters_from_levels(const std::vector<double>& mu, const WeldedTopolog
 Clusters merge_clusters(const Clusters& clusters, size_t target, const float* base, const Trajectories& frames,
                         const VertexAdjacency& adjacency);
 
+// Labels renumbered to 0..K−1 in order of first appearance: clusters no vertex has disappear. Labels must be below
+// label.size().
+Clusters compact(const std::vector<uint32_t>& label);
+
 }  // namespace segmorph

@@ -6,6 +6,7 @@
 
 #include "compressed.h"
 #include "metrics.h"
+#include "vertex_gather.h"
 
 namespace segmorph {
 namespace {
@@ -74,6 +75,7 @@ Status encode_base(const BaseMesh& base, const std::vector<FrameSequence>& frame
 // `clips` with their vertices in the order the decoder gets back from Draco.
 std::vector<FrameSequence> in_decoded_order(const std::vector<FrameSequence>& clips, const PrimitiveEncoding& encoding) {
   const BaseMesh& decoded = encoding.decoded;
+  const VertexGather to_decoded(encoding.source);
   std::vector<FrameSequence> reordered(clips.size());
   for (size_t c = 0; c < clips.size(); ++c) {
     const FrameSequence& clip = clips[c];
@@ -83,11 +85,7 @@ std::vector<FrameSequence> in_decoded_order(const std::vector<FrameSequence>& cl
     out.times = clip.times;
     out.triangles = decoded.triangles;
     out.positions.resize(clip.frame_count * decoded.vertex_count * 3);
-    for (size_t f = 0; f < clip.frame_count; ++f)
-      for (size_t v = 0; v < decoded.vertex_count; ++v)
-        for (int k = 0; k < 3; ++k)
-          out.positions[(f * decoded.vertex_count + v) * 3 + size_t(k)] =
-              clip.frame(f)[size_t(encoding.source[v]) * 3 + size_t(k)];
+    for (size_t f = 0; f < clip.frame_count; ++f) to_decoded.gather(clip.frame(f), out.frame(f));
   }
   return reordered;
 }
