@@ -111,7 +111,7 @@ Status segment(const EncodeProblem& p, Clusters& clusters, StreamReport& report)
                                                 fit_affine_motion(p.base_welded.data(), p.trajectories, clusters));
   if (p.settings.curvature_refinement) {
     const MorseBands refined = refine_levels(morse.mu, minimum_curvature(positions, p.topology), p.topology,
-                                             p.adjacency, bands, RefinementSettings(), &report.refinement_iterations);
+                                             p.adjacency, bands, RefinementSettings(), &report.curvature_refinement_passes);
     clusters = clusters_from_levels(morse.mu, p.topology, p.adjacency, refined, morse_settings);
   }
   return Status::Ok();
@@ -172,10 +172,8 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   set_scales(problem, report.e_pi_morse);
   clusters = choose_clusters(problem, clusters, content);
   if (settings.motion_refinement) {
-    int iterations = 0;
     clusters = refine_by_motion(clusters, problem.base_welded.data(), problem.trajectories, problem.adjacency, 8,
-                                &iterations);
-    report.refinement_iterations += iterations;
+                                &report.motion_refinement_iterations);
   }
   const AffineMotion fitted = fit_affine_motion(problem.base_welded.data(), problem.trajectories, clusters);
   report.e_pi = motion_compensation_error(problem.base_welded.data(), problem.trajectories, clusters, fitted);

@@ -272,6 +272,14 @@ Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, t
     }
   }
   SEGMORPH_RETURN_IF_ERROR(status);
+  // K is merged down from the Morse segmentation's clusters, never split up: a larger --clusters is said, not hidden.
+  for (const StreamReport& stream : encoded.report.primitives)
+    if (settings.clusters > stream.clusters) {
+      report_progress(progress, "warning: --clusters " + std::to_string(settings.clusters) + " is more than the " +
+                                    "segmentation gives a primitive (" + std::to_string(stream.clusters) +
+                                    " clusters): it is coded with " + std::to_string(stream.clusters));
+      break;
+    }
   output = std::move(encoded.model);
   report = EncodeReport();
   report.streams = std::move(encoded.report.primitives);

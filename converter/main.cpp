@@ -57,7 +57,8 @@ const char* const kUsage =
     "  --fast-decode      encode: code the residuals for decoding speed (stream version 2, its table\n"
     "                     code): about a third less decoding time, files 1 to 11 % larger on the three\n"
     "                     classic sequences (docs/codec.md). Not with --lossless\n"
-    "  --clusters K       encode: number of motion clusters (default: automatic)\n"
+    "  --clusters K       encode: number of motion clusters, 1 to 65535, at most what the segmentation\n"
+    "                     gives a primitive (more is said and coded with that many; default: automatic)\n"
     "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 22 (default: from\n"
     "                     the error target, at least 12; 14 with --bpvf or --lossless)\n"
     "  --normal-bits B    encode: Draco quantization bits of the base mesh normals, 4 to 16 (default 8)\n"
@@ -227,7 +228,7 @@ int run_encode(const Options& options) {
   if (options.json) {
     std::printf(
         "{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"primitives\":%zu,\"clusters\":%.0f,"
-        "\"e_pi_before_refinement\":%.6g,\"e_pi\":%.6g,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,"
+        "\"e_pi_morse\":%.6g,\"e_pi\":%.6g,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,"
         "\"draco_bytes\":%zu,\"animation_bytes\":%zu,\"milliseconds\":{\"segmentation\":%.1f,\"motion\":%.1f,"
         "\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"draco\":%.1f}}\n",
         json_string(path).c_str(), json_string(options.output).c_str(), bytes, report.streams.size(), clusters,
@@ -239,7 +240,7 @@ int run_encode(const Options& options) {
     if (report.streams.empty())
       std::printf("\n");
     else
-      std::printf(", %zu primitive%s coded as frames, %.0f clusters, E(Pi) %.6f (before refinement %.6f)\n",
+      std::printf(", %zu primitive%s coded as frames, %.0f clusters, E(Pi) %.6f (Morse segmentation %.6f)\n",
                   report.streams.size(), report.streams.size() == 1 ? "" : "s", clusters, e_pi, e_pi_morse);
   }
   return 0;

@@ -280,6 +280,24 @@ TEST(CodecHostile, LosslessEscapeBeyondAnyFloatDifferenceIsRefused) {
 namespace segmorph {
 namespace {
 
+// Motion refinement moves boundary vertices to the clusters whose motion predicts them best: at the same K, E(Π) after
+// it is below E(Π) without it. (E(Π) of the raw Morse segmentation, e_pi_morse, is of more clusters, before the merge
+// to K: it is no reference for the final clusters.)
+TEST(Codec, MotionRefinementLowersTheSegmentationErrorAtTheSameClusterCount) {
+  const std::vector<FrameSequence> clips = {bending_clip(20, 1.2, 0)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  CodecSettings settings;
+  settings.clusters = 6;
+  settings.motion_refinement = false;
+  const Encoded plain = encode(clips, base, settings);
+  settings.motion_refinement = true;
+  const Encoded refined = encode(clips, base, settings);
+  ASSERT_EQ(plain.report.clusters, refined.report.clusters);
+  EXPECT_EQ(plain.report.motion_refinement_iterations, 0);
+  EXPECT_GT(refined.report.motion_refinement_iterations, 0);
+  EXPECT_LT(refined.report.e_pi, plain.report.e_pi);
+}
+
 // The paper's Cow, the classic sequence: E(Π) within the paper's Table 2, and the KG targets met.
 TEST(CodecSequences, CowMeetsThePapersSegmentationErrorAndTheErrorTargets) {
   if (!testing::have_shared_samples()) GTEST_SKIP() << "../shared/samples is absent: the cow sequence is not tested";
@@ -296,7 +314,6 @@ TEST(CodecSequences, CowMeetsThePapersSegmentationErrorAndTheErrorTargets) {
     settings.target = target;
     const Encoded encoded = encode(clips, base, settings);
     EXPECT_LE(encoded.report.e_pi, 0.0016);
-    EXPECT_LE(encoded.report.e_pi, encoded.report.e_pi_morse);
     EXPECT_LE(kg(clips, encoded.reconstruction), target);
   }
 }
