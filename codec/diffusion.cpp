@@ -5,6 +5,7 @@
 #include <queue>
 
 #include "eigensolver.h"
+#include "feature_points.h"
 #include "laplacian.h"
 
 namespace segmorph {
@@ -14,36 +15,6 @@ double edge_length(const std::vector<double>& positions, uint32_t a, uint32_t b)
   const double dx = positions[a * 3] - positions[b * 3], dy = positions[a * 3 + 1] - positions[b * 3 + 1],
                dz = positions[a * 3 + 2] - positions[b * 3 + 2];
   return std::sqrt(dx * dx + dy * dy + dz * dz);
-}
-
-uint32_t farthest(const std::vector<double>& distance, const std::vector<uint32_t>& vertices) {
-  uint32_t best = vertices.front();
-  for (uint32_t v : vertices)
-    if (distance[v] > distance[best] && std::isfinite(distance[v])) best = v;
-  return best;
-}
-
-// Vertices whose f is the largest within geodesic distance `radius` (ties to the lowest index).
-std::vector<uint32_t> maxima(const std::vector<double>& f, const std::vector<uint32_t>& vertices,
-                             const std::vector<double>& positions, const VertexAdjacency& adjacency, double radius) {
-  std::vector<uint32_t> found;
-  for (uint32_t v : vertices) {
-    bool ring_maximum = true;  // cheap first test: the 1-ring
-    for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1] && ring_maximum; ++i) {
-      const uint32_t u = adjacency.neighbour[i];
-      ring_maximum = f[u] < f[v] || (f[u] == f[v] && v < u);
-    }
-    if (!ring_maximum) continue;
-    const std::vector<double> near = edge_path_distances(positions, adjacency, v, radius);
-    bool maximum = true;
-    for (uint32_t u : vertices)
-      if (near[u] <= radius && u != v && (f[u] > f[v] || (f[u] == f[v] && u < v))) {
-        maximum = false;
-        break;
-      }
-    if (maximum) found.push_back(v);
-  }
-  return found;
 }
 
 }  // namespace
@@ -90,8 +61,7 @@ Status diffusion_morse_function(const std::vector<double>& positions, const Weld
     double area = 0;
     for (uint32_t v : vertices) area += laplacian.mass[v];
 
-    const uint32_t v1 = farthest(edge_path_distances(positions, adjacency, vertices.front()), vertices);
-    const uint32_t v2 = farthest(edge_path_distances(positions, adjacency, v1), vertices);
+    const auto [v1, v2] = farthest_points(positions, adjacency, vertices);
     out.farthest_points.push_back({v1, v2});
     if (pairs < 2 || !(lambda(1) > 0)) continue;  // a single vertex, or no surface: μ stays 0
 
@@ -127,15 +97,8 @@ Status diffusion_morse_function(const std::vector<double>& positions, const Weld
       f1[vertices[i]] = d1(Eigen::Index(i));
       f2[vertices[i]] = d2(Eigen::Index(i));
     }
-    const double radius = settings.epsilon * std::sqrt(area);
-    const std::vector<uint32_t> e1 = maxima(f1, vertices, positions, adjacency, radius);
-    const std::vector<uint32_t> e2 = maxima(f2, vertices, positions, adjacency, radius);
-    std::vector<uint32_t> features;
-    for (uint32_t p : e1) {
-      const std::vector<double> near = edge_path_distances(positions, adjacency, p, radius);
-      if (std::any_of(e2.begin(), e2.end(), [&](uint32_t q) { return near[q] <= radius; })) features.push_back(p);
-    }
-    if (features.empty()) features = {v1, v2};
+    const std::vector<uint32_t> features =
+        feature_points(f1, f2, vertices, positions, adjacency, settings.epsilon * std::sqrt(area), {v1, v2});
 
     for (uint32_t p : features) {
       out.feature_points.push_back(p);
