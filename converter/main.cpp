@@ -5,92 +5,12 @@
 #include <string>
 #include <vector>
 
+#include "command_line.h"
 #include "segmorph/segmorph.h"
 #include "segmorph/version.h"
 
 namespace segmorph {
 namespace {
-
-const char* const kUsage =
-    "usage: segmorph <command> [options]\n"
-    "\n"
-    "Commands:\n"
-    "  info FILE [--json] [--fps N]\n"
-    "      List the animated primitives of a glTF file: vertices, triangles, kind (morph, skinned or\n"
-    "      morph+skinned), clips with their frame counts and durations, connected components, and the\n"
-    "      size of the baked frames (V x F x 3 floats).\n"
-    "  bake IN -o OUT [--fps N]\n"
-    "      Write OUT (.glb or .gltf) with every animated primitive baked into POSITION and NORMAL morph\n"
-    "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
-    "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
-    "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
-    "         [--normal-bits B] [--texcoord-bits B] [--skins keep|bake] [--targets auto|keep|bake]\n"
-    "         [--fast-decode] [--json]\n"
-    "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
-    "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
-    "      (see --targets); a skinned mesh keeps its skin (see --skins). Meshes that animated nodes move\n"
-    "      are compressed with Draco, and translation, rotation and scale tracks are coded (the extension\n"
-    "      is then required). Default target: --error 0.15 (KG error in %).\n"
-    "  decode IN -o OUT [--frames FRAMES]\n"
-    "      Restore standard glTF from an encoded file: morph targets in the form bake writes, a mesh's kept\n"
-    "      morph targets played by its own weights animation, kept skins, plain meshes and float tracks.\n"
-    "      With --frames, also (or, without -o, only) write what every compressed primitive's stream\n"
-    "      decodes to as raw little-endian float32, the layout examples/engine_decode writes: primitive by\n"
-    "      primitive (meshes in order, then their primitives), clip by clip, frame by frame, vertex by\n"
-    "      vertex, x y z; the frames are positions, except for kept morph targets: one clip of their\n"
-    "      POSITION displacements (docs/runtime.md).\n"
-    "  verify ORIGINAL COMPRESSED [--json]\n"
-    "      Compare the animation of two files (either may be encoded, baked, original or written by another\n"
-    "      tool: primitives and vertices are paired by trajectory, COMPRESSED is sampled at ORIGINAL's frame\n"
-    "      times): bytes, bits per vertex per frame, KG error, RMSE and maximum error over the bounding-box\n"
-    "      diagonal.\n"
-    "\n"
-    "Options:\n"
-    "  -o, --output FILE  output file (.glb: binary; .gltf: JSON with FILE's name .bin beside it)\n"
-    "  --frames FILE      decode: also write the decoded frames as raw float32 (see decode)\n"
-    "  --fps N            sample every clip on a regular grid of N frames per second; by default the\n"
-    "                     union of the clip's key times, or 30 fps where keys are denser than 60 per second\n"
-    "  --error E          encode: KG error target in percent (default 0.15)\n"
-    "  --bpvf R           encode: target bits per vertex per frame of the whole output, images and JSON\n"
-    "                     included (it encodes twice: the first encode measures what the rest of the file takes)\n"
-    "  --lossless         encode: restore the sampled frames bit for bit\n"
-    "  --fast-decode      encode: code the residuals for decoding speed (stream version 2, its table\n"
-    "                     code): about a third less decoding time, files 1 to 11 % larger on the three\n"
-    "                     classic sequences (docs/codec.md). Not with --lossless\n"
-    "  --clusters K       encode: number of motion clusters, 1 to 65535, at most what the segmentation\n"
-    "                     gives a primitive (more is said and coded with that many; default: automatic)\n"
-    "  --position-bits B  encode: Draco quantization bits of the base mesh positions, 8 to 22 (default: from\n"
-    "                     the error target, at least 12; 14 with --bpvf or --lossless)\n"
-    "  --normal-bits B    encode: Draco quantization bits of the base mesh normals, 4 to 16 (default 8)\n"
-    "  --texcoord-bits B  encode: Draco quantization bits of the base mesh texture coordinates, 4 to 30\n"
-    "                     (default 12)\n"
-    "  --skins MODE       encode: what a skinned mesh (without morph targets) stores. keep (default): its\n"
-    "                     skin, the mesh compressed with Draco and the joints' tracks coded; bake: its\n"
-    "                     sampled frames, for runtimes without skinning. --bpvf and --lossless bake, and\n"
-    "                     so does keep where a kept skin cannot reach --error (its weights are bytes)\n"
-    "  --targets MODE     encode: what a morph-target mesh (unskinned, one node) stores. keep: its targets,\n"
-    "                     compressed, played by its own weights animation; bake: its sampled frames, like a\n"
-    "                     skinned mesh. auto (default): where a mesh has at most half as many targets as\n"
-    "                     frames, encode both ways and keep the smaller file (with --bpvf, the one with the\n"
-    "                     smaller error); never keep them with --lossless (kept targets are lossy)\n"
-    "  --json             info, encode, verify: print one JSON object instead of text\n"
-    "  -q, --quiet        no progress messages on stderr\n"
-    "  -h, --help         this help\n"
-    "  --version          print the version\n"
-    "\n"
-    "Exit status: 0 on success, 1 when the input cannot be processed, 2 on a usage error.\n";
-
-struct Options {
-  std::string command;
-  std::vector<std::string> inputs;
-  std::string output;
-  std::string frames;  // decode --frames: the decoded frames as raw floats
-  SampleSettings sampling;
-  EncodeSettings encode;  // its sampling is `sampling`
-  bool rate_given = false;
-  bool json = false;
-  bool quiet = false;
-};
 
 int usage_error(const std::string& message) {
   std::fprintf(stderr, "segmorph: %s (see segmorph --help)\n", message.c_str());
@@ -106,7 +26,7 @@ int fail(const std::string& file, const Status& status) {
   return 1;
 }
 
-void progress(const Options& options, const std::string& message) {
+void progress(const CommandLine& options, const std::string& message) {
   if (!options.quiet) std::fprintf(stderr, "segmorph: %s\n", message.c_str());
 }
 
@@ -126,7 +46,7 @@ std::string json_string(const std::string& s) {
 }
 
 // Reads `path` into `model`, its warnings as progress.
-Status load(const std::string& path, const Options& options, Model& model) {
+Status load(const std::string& path, const CommandLine& options, Model& model) {
   progress(options, "reading " + path);
   std::vector<std::string> warnings;
   SEGMORPH_RETURN_IF_ERROR(Model::load(path, model, &warnings));
@@ -134,11 +54,11 @@ Status load(const std::string& path, const Options& options, Model& model) {
   return Status::Ok();
 }
 
-Progress progress_of(const Options& options) {
+Progress progress_of(const CommandLine& options) {
   return [&options](const std::string& message) { progress(options, message); };
 }
 
-int run_info(const Options& options) {
+int run_info(const CommandLine& options) {
   const std::string& path = options.inputs[0];
   Model model;
   InfoReport report;
@@ -187,7 +107,7 @@ int run_info(const Options& options) {
   return 0;
 }
 
-int run_bake(const Options& options) {
+int run_bake(const CommandLine& options) {
   const std::string& path = options.inputs[0];
   Model model;
   BakeReport report;
@@ -202,7 +122,7 @@ int run_bake(const Options& options) {
   return 0;
 }
 
-int run_encode(const Options& options) {
+int run_encode(const CommandLine& options) {
   const std::string& path = options.inputs[0];
   Model input, output;
   EncodeReport report;
@@ -246,7 +166,7 @@ int run_encode(const Options& options) {
   return 0;
 }
 
-int run_decode(const Options& options) {
+int run_decode(const CommandLine& options) {
   const std::string& path = options.inputs[0];
   Model model;
   DecodeReport report;
@@ -273,7 +193,7 @@ int run_decode(const Options& options) {
   return 0;
 }
 
-int run_verify(const Options& options) {
+int run_verify(const CommandLine& options) {
   const std::string &original_path = options.inputs[0], &compressed_path = options.inputs[1];
   Model original, compressed;
   Status status = load(original_path, options, original);
@@ -311,138 +231,29 @@ int run_verify(const Options& options) {
 }
 
 int run(int argc, char** argv) {
-  Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&](std::string& out) {
-      if (i + 1 >= argc) return false;
-      out = argv[++i];
-      return true;
-    };
-    if (arg == "-h" || arg == "--help") {
-      std::fputs(kUsage, stdout);
+  CommandLine options;
+  std::string error;
+  switch (parse_command_line(argc, argv, options, error)) {
+    case ParseResult::help:
+      std::fputs(usage().c_str(), stdout);
       return 0;
-    } else if (arg == "--version") {
+    case ParseResult::version:
       std::printf("segmorph %d.%d.%d (animation streams %d to %d, track stream %d)\n", SEGMORPH_VERSION_MAJOR,
                   SEGMORPH_VERSION_MINOR, SEGMORPH_VERSION_PATCH, SEGMORPH_STREAM_VERSION_MIN,
                   SEGMORPH_STREAM_VERSION_MAX, SEGMORPH_TRACK_STREAM_VERSION);
       return 0;
-    } else if (arg == "-o" || arg == "--output") {
-      if (!value(options.output)) return usage_error(arg + " needs a file name");
-    } else if (arg == "--frames") {
-      if (!value(options.frames)) return usage_error(arg + " needs a file name");
-    } else if (arg == "--fps") {
-      std::string text;
-      if (!value(text)) return usage_error("--fps needs a number");
-      char* end = nullptr;
-      options.sampling.fps = std::strtod(text.c_str(), &end);
-      if (end == text.c_str() || *end || !(options.sampling.fps > 0) || options.sampling.fps > 1000)
-        return usage_error("--fps takes a number of frames per second between 0 and 1000, not '" + text + "'");
-    } else if (arg == "--error" || arg == "--bpvf") {
-      std::string text;
-      if (!value(text)) return usage_error(arg + " needs a number");
-      char* end = nullptr;
-      const double number = std::strtod(text.c_str(), &end);
-      if (end == text.c_str() || *end || !(number > 0) || number > (arg == "--error" ? 100.0 : 1000.0))
-        return usage_error(arg + " takes a positive number, not '" + text + "'");
-      if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
-      options.rate_given = true;
-      options.encode.mode = arg == "--error" ? RateMode::error : RateMode::bpvf;
-      options.encode.target = number;
-    } else if (arg == "--lossless") {
-      if (options.rate_given) return usage_error("give one of --error, --bpvf and --lossless");
-      options.rate_given = true;
-      options.encode.mode = RateMode::lossless;
-    } else if (arg == "--fast-decode") {
-      options.encode.fast_decode = true;
-    } else if (arg == "--clusters" || arg == "--position-bits" || arg == "--normal-bits" || arg == "--texcoord-bits") {
-      const bool clusters = arg == "--clusters";
-      long low = 4, high = 30;  // --texcoord-bits
-      if (clusters) low = 1, high = 65535;
-      // Positions: beyond 22 bits the grid is finer than a float resolves across the bounding box (and Draco's
-      // decoded points no longer match their originals; at 30 bits Draco crashed).
-      if (arg == "--position-bits") low = 8, high = 22;
-      if (arg == "--normal-bits") high = 16;
-      std::string text;
-      if (!value(text)) return usage_error(arg + " needs a number");
-      char* end = nullptr;
-      const long number = std::strtol(text.c_str(), &end, 10);
-      if (end == text.c_str() || *end || number < low || number > high)
-        return usage_error(arg + " takes a whole number from " + std::to_string(low) + " to " + std::to_string(high) +
-                           ", not '" + text + "'");
-      if (clusters)
-        options.encode.clusters = size_t(number);
-      else if (arg == "--position-bits")
-        options.encode.position_bits = int(number);
-      else if (arg == "--normal-bits")
-        options.encode.normal_bits = int(number);
-      else
-        options.encode.texcoord_bits = int(number);
-    } else if (arg == "--skins") {
-      std::string text;
-      if (!value(text)) return usage_error("--skins needs keep or bake");
-      if (text == "keep")
-        options.encode.skins = EncodeSettings::Skins::keep;
-      else if (text == "bake")
-        options.encode.skins = EncodeSettings::Skins::bake;
-      else
-        return usage_error("--skins takes keep or bake, not '" + text + "'");
-    } else if (arg == "--targets") {
-      std::string text;
-      if (!value(text)) return usage_error("--targets needs auto, keep or bake");
-      if (text == "auto")
-        options.encode.targets = EncodeSettings::Targets::automatic;
-      else if (text == "keep")
-        options.encode.targets = EncodeSettings::Targets::keep;
-      else if (text == "bake")
-        options.encode.targets = EncodeSettings::Targets::bake;
-      else
-        return usage_error("--targets takes auto, keep or bake, not '" + text + "'");
-    } else if (arg == "--json") {
-      options.json = true;
-    } else if (arg == "-q" || arg == "--quiet") {
-      options.quiet = true;
-    } else if (arg.size() > 1 && arg[0] == '-') {
-      return usage_error("unknown option " + arg);
-    } else if (options.command.empty()) {
-      options.command = arg;
-    } else {
-      options.inputs.push_back(arg);
-    }
+    case ParseResult::usage_error:
+      if (!error.empty()) return usage_error(error);
+      std::fputs(usage().c_str(), stderr);
+      return 2;
+    case ParseResult::run:
+      break;
   }
-  if (options.command.empty()) {
-    std::fputs(kUsage, stderr);
-    return 2;
-  }
-  if (options.command == "info") {
-    if (options.inputs.size() != 1) return usage_error("info takes one file");
-    if (!options.output.empty()) return usage_error("info writes no file; -o is not for it");
-    return run_info(options);
-  }
-  if (options.command == "bake") {
-    if (options.inputs.size() != 1) return usage_error("bake takes one input file");
-    if (options.output.empty()) return usage_error("bake needs -o OUT");
-    if (!has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
-    return run_bake(options);
-  }
-  if (!options.frames.empty() && options.command != "decode") return usage_error("--frames is for decode");
-  if (options.command == "encode" || options.command == "decode") {
-    if (options.inputs.size() != 1) return usage_error(options.command + " takes one input file");
-    const bool frames_only = options.command == "decode" && !options.frames.empty() && options.output.empty();
-    if (options.output.empty() && !frames_only) return usage_error(options.command + " needs -o OUT");
-    if (!frames_only && !has_gltf_extension(options.output)) return usage_error("the output must end in .glb or .gltf");
-    options.encode.sampling = options.sampling;
-    if (options.encode.targets == EncodeSettings::Targets::keep && options.encode.mode == RateMode::lossless)
-      return usage_error("--targets keep is lossy: it cannot be combined with --lossless");
-    if (options.encode.fast_decode && options.encode.mode == RateMode::lossless)
-      return usage_error("--fast-decode codes lossy residuals: it cannot be combined with --lossless");
-    return options.command == "encode" ? run_encode(options) : run_decode(options);
-  }
-  if (options.command == "verify") {
-    if (options.inputs.size() != 2) return usage_error("verify takes two files: ORIGINAL COMPRESSED");
-    return run_verify(options);
-  }
-  return usage_error("unknown command '" + options.command + "'");
+  if (options.command == "info") return run_info(options);
+  if (options.command == "bake") return run_bake(options);
+  if (options.command == "encode") return run_encode(options);
+  if (options.command == "decode") return run_decode(options);
+  return run_verify(options);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <regex>
 #include <sstream>
 
 #include "accessor.h"
@@ -104,6 +105,83 @@ TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 30").exit_code, 2);  // crashed
   EXPECT_EQ(run("encode " + sample("Fox/Fox.glb") + " -o x.glb --position-bits 12.5").exit_code, 2);
   EXPECT_EQ(run("verify " + sample("Fox/Fox.glb")).exit_code, 2);
+}
+
+// Options come from one table: --name=value is the same as --name value, and an option the command does not use is
+// refused, naming the option and the command.
+TEST(Cli, OptionsAreReadOneWayForEveryCommand) {
+  const std::string directory = output_directory("options");
+  const std::string input = sample("SimpleMorph/SimpleMorph.gltf");
+  ASSERT_EQ(run("encode -q " + input + " -o " + directory + "/spaced.glb --error 0.5 --clusters 3").exit_code, 0);
+  ASSERT_EQ(run("-q encode " + input + " --error=0.5 --clusters=3 --output=" + directory + "/equals.glb").exit_code,
+            0);
+  EXPECT_EQ(read_text(directory + "/spaced.glb"), read_text(directory + "/equals.glb"));
+  struct Refused {
+    std::string arguments, message;
+  };
+  const Refused refused[] = {
+      {"decode " + input + " -o " + directory + "/x.glb --json", "--json is not an option of decode"},
+      {"decode " + input + " -o " + directory + "/x.glb --error 0.5", "--error is not an option of decode"},
+      {"bake " + input + " -o " + directory + "/x.glb --json", "--json is not an option of bake"},
+      {"verify " + input + " " + input + " --clusters 4", "--clusters is not an option of verify"},
+      {"info " + input + " -o " + directory + "/x.glb", "-o is not an option of info"},
+      {"info " + input + " --frames " + directory + "/x.bin", "--frames is not an option of info"},
+      {"info " + input + " --json=yes", "--json takes no value"},
+      {"info " + input + " --fps=", "--fps takes a number more than 0 and at most 1000, not ''"},
+      {"info " + input + " --fps 0", "--fps takes a number more than 0 and at most 1000, not '0'"},
+      {"encode " + input + " -o " + directory + "/x.glb --error 1000", "at most 100, not '1000'"},
+      {"encode " + input + " -o " + directory + "/x.glb --skins=some", "--skins takes keep or bake, not 'some'"},
+      {"encode " + input + " -o " + directory + "/x.glb --targets", "--targets needs auto, keep or bake"},
+      {"encode " + input + " -o " + directory + "/x.glb --lossless --error=1", "give one of --error, --bpvf and"},
+  };
+  for (const Refused& r : refused) {
+    const Result result = run(r.arguments);
+    EXPECT_EQ(result.exit_code, 2) << r.arguments;
+    EXPECT_NE(result.err.find(r.message), std::string::npos) << r.arguments << ": " << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  }
+  EXPECT_FALSE(fs::exists(directory + "/x.glb"));
+}
+
+// Every range --help states is the one the tool holds: its ends are accepted (the run then fails on the missing
+// input, exit 1) and a step beyond them is a usage error (exit 2).
+TEST(Cli, HelpStatesEveryRangeTheToolHolds) {
+  const std::string help = run("--help").out;
+  std::vector<std::string> entries;  // one per option, its wrapped lines joined
+  std::istringstream lines(help.substr(help.find("\nOptions")));
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("  -", 0) == 0)
+      entries.push_back(line);
+    else if (!entries.empty() && line.rfind("                     ", 0) == 0)
+      entries.back() += " " + line.substr(21);
+  }
+  const std::regex range(R"(^  (?:-\w, )?(--[a-z-]+) \S+ +([a-z, ]+): .*(from (\d+) to (\d+)|more than (\S+) and at most (\S+)))");
+  const std::string missing = temporary_path("missing.glb"), output = temporary_path("never.glb");
+  fs::remove(missing);
+  int ranges = 0;
+  for (const std::string& entry : entries) {
+    std::smatch match;
+    if (!std::regex_search(entry, match, range)) continue;
+    ++ranges;
+    const std::string option = match[1], command = std::string(match[2]).substr(0, std::string(match[2]).find(','));
+    std::string files = command + " " + missing;
+    if (command == "verify") files += " " + missing;
+    if (command == "bake" || command == "encode") files += " -o " + output;
+    const bool whole = match[4].matched;
+    const double low = std::stod(whole ? match[4] : match[6]), high = std::stod(whole ? match[5] : match[7]);
+    std::vector<std::pair<double, int>> cases = {{high, 1}, {high + 1, 2}};
+    if (whole)
+      cases.insert(cases.end(), {{low, 1}, {low - 1, 2}});
+    else
+      cases.insert(cases.end(), {{low, 2}, {low + (high - low) * 1e-3, 1}});
+    for (const auto& [value, code] : cases) {
+      char text[32];
+      std::snprintf(text, sizeof(text), "%.10g", value);
+      EXPECT_EQ(run(files + " -q " + option + " " + text).exit_code, code) << entry << "\n  value " << text;
+    }
+  }
+  EXPECT_EQ(ranges, 7) << help;  // --fps, --error, --bpvf, --clusters and the three Draco precisions
+  EXPECT_FALSE(fs::exists(output));
 }
 
 TEST(Cli, BadInputsFailCleanly) {

@@ -1,0 +1,321 @@
+#include "command_line.h"
+
+#include <cstdlib>
+#include <cstring>
+
+namespace segmorph {
+namespace {
+
+enum Command : unsigned { kInfo = 1, kBake = 2, kEncode = 4, kDecode = 8, kVerify = 16, kEvery = 31 };
+const char* const kCommandNames[] = {"info", "bake", "encode", "decode", "verify"};
+
+const char* const kCommands =
+    "usage: segmorph <command> [options]\n"
+    "\n"
+    "Commands:\n"
+    "  info FILE [--json] [--fps N]\n"
+    "      List the animated primitives of a glTF file: vertices, triangles, kind (morph, skinned or\n"
+    "      morph+skinned), clips with their frame counts and durations, connected components, and the\n"
+    "      size of the baked frames (V x F x 3 floats).\n"
+    "  bake IN -o OUT [--fps N]\n"
+    "      Write OUT (.glb or .gltf) with every animated primitive baked into POSITION and NORMAL morph\n"
+    "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
+    "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
+    "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
+    "         [--normal-bits B] [--texcoord-bits B] [--skins keep|bake] [--targets auto|keep|bake]\n"
+    "         [--fast-decode] [--json]\n"
+    "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
+    "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
+    "      (see --targets); a skinned mesh keeps its skin (see --skins). Meshes that animated nodes move\n"
+    "      are compressed with Draco, and translation, rotation and scale tracks are coded (the extension\n"
+    "      is then required). Default target: --error 0.15 (KG error in %).\n"
+    "  decode IN -o OUT [--frames FRAMES]\n"
+    "      Restore standard glTF from an encoded file: morph targets in the form bake writes, a mesh's kept\n"
+    "      morph targets played by its own weights animation, kept skins, plain meshes and float tracks.\n"
+    "      With --frames, also (or, without -o, only) write what every compressed primitive's stream\n"
+    "      decodes to as raw little-endian float32, the layout examples/engine_decode writes: primitive by\n"
+    "      primitive (meshes in order, then their primitives), clip by clip, frame by frame, vertex by\n"
+    "      vertex, x y z; the frames are positions, except for kept morph targets: one clip of their\n"
+    "      POSITION displacements (docs/runtime.md).\n"
+    "  verify ORIGINAL COMPRESSED [--json] [--fps N]\n"
+    "      Compare the animation of two files (either may be encoded, baked, original or written by another\n"
+    "      tool: primitives and vertices are paired by trajectory, COMPRESSED is sampled at ORIGINAL's frame\n"
+    "      times): bytes, bits per vertex per frame, KG error, RMSE and maximum error over the bounding-box\n"
+    "      diagonal.\n"
+    "\n"
+    "Options (an option's value may also follow '=': --error=0.5):\n";
+
+const char* const kExitStatus = "\nExit status: 0 on success, 1 when the input cannot be processed, 2 on a usage error.\n";
+
+// The value an option takes.
+enum class Kind {
+  flag,    // none
+  text,    // any text (a file name)
+  number,  // a number in (low, high] (low_open) or [low, high]
+  whole,   // a whole number in [low, high]
+  choice,  // one of `choices`
+};
+
+struct Option {
+  const char* name;   // --name
+  const char* alias;  // -n, or nullptr
+  const char* argument;  // the value's name in --help ("N", "FILE"); a choice shows its choices
+  unsigned commands;  // those that take it
+  Kind kind;
+  double low, high;
+  bool low_open;
+  const char* choices;  // choice: "keep|bake"
+  int group;            // options of one group > 0 exclude each other
+  const char* help;     // "{range}" stands for the range
+  void (*apply)(CommandLine& line, const std::string& text, double number);
+};
+
+// Positions: beyond 22 bits the grid is finer than a float resolves across the bounding box (and Draco's decoded
+// points no longer match their originals; at 30 bits Draco crashed).
+const Option kOptions[] = {
+    {"--output", "-o", "FILE", kBake | kEncode | kDecode, Kind::text, 0, 0, false, nullptr, 0,
+     "output file (.glb: binary; .gltf: JSON with FILE's name .bin beside it)",
+     [](CommandLine& line, const std::string& text, double) { line.output = text; }},
+    {"--frames", nullptr, "FILE", kDecode, Kind::text, 0, 0, false, nullptr, 0,
+     "also write the decoded frames as raw float32 (see decode)",
+     [](CommandLine& line, const std::string& text, double) { line.frames = text; }},
+    {"--fps", nullptr, "N", kInfo | kBake | kEncode | kVerify, Kind::number, 0, 1000, true, nullptr, 0,
+     "sample every clip on a regular grid of N frames per second, {range}; by default the union of the clip's key "
+     "times, or 30 fps where keys are denser than 60 per second",
+     [](CommandLine& line, const std::string&, double number) { line.sampling.fps = number; }},
+    {"--error", nullptr, "E", kEncode, Kind::number, 0, 100, true, nullptr, 1,
+     "KG error target in percent, {range} (default 0.15)",
+     [](CommandLine& line, const std::string&, double number) {
+       line.encode.mode = RateMode::error;
+       line.encode.target = number;
+     }},
+    {"--bpvf", nullptr, "R", kEncode, Kind::number, 0, 1000, true, nullptr, 1,
+     "target bits per vertex per frame of the whole output, images and JSON included, {range} (it encodes twice: "
+     "the first encode measures what the rest of the file takes)",
+     [](CommandLine& line, const std::string&, double number) {
+       line.encode.mode = RateMode::bpvf;
+       line.encode.target = number;
+     }},
+    {"--lossless", nullptr, nullptr, kEncode, Kind::flag, 0, 0, false, nullptr, 1,
+     "restore the sampled frames bit for bit",
+     [](CommandLine& line, const std::string&, double) { line.encode.mode = RateMode::lossless; }},
+    {"--fast-decode", nullptr, nullptr, kEncode, Kind::flag, 0, 0, false, nullptr, 0,
+     "code the residuals for decoding speed (stream version 2, its table code): about a third less decoding time, "
+     "files 1 to 11 % larger on the three classic sequences (docs/codec.md). Not with --lossless",
+     [](CommandLine& line, const std::string&, double) { line.encode.fast_decode = true; }},
+    {"--clusters", nullptr, "K", kEncode, Kind::whole, 1, 65535, false, nullptr, 0,
+     "number of motion clusters, {range}, at most what the segmentation gives a primitive (more is said and coded "
+     "with that many; default: automatic)",
+     [](CommandLine& line, const std::string&, double number) { line.encode.clusters = size_t(number); }},
+    {"--position-bits", nullptr, "B", kEncode, Kind::whole, 8, 22, false, nullptr, 0,
+     "Draco quantization bits of the base mesh positions, {range} (default: from the error target, at least 12; 14 "
+     "with --bpvf or --lossless)",
+     [](CommandLine& line, const std::string&, double number) { line.encode.position_bits = int(number); }},
+    {"--normal-bits", nullptr, "B", kEncode, Kind::whole, 4, 16, false, nullptr, 0,
+     "Draco quantization bits of the base mesh normals, {range} (default 8)",
+     [](CommandLine& line, const std::string&, double number) { line.encode.normal_bits = int(number); }},
+    {"--texcoord-bits", nullptr, "B", kEncode, Kind::whole, 4, 30, false, nullptr, 0,
+     "Draco quantization bits of the base mesh texture coordinates, {range} (default 12)",
+     [](CommandLine& line, const std::string&, double number) { line.encode.texcoord_bits = int(number); }},
+    {"--skins", nullptr, "MODE", kEncode, Kind::choice, 0, 0, false, "keep|bake", 0,
+     "what a skinned mesh (without morph targets) stores. keep (default): its skin, the mesh compressed with Draco "
+     "and the joints' tracks coded; bake: its sampled frames, for runtimes without skinning. --bpvf and --lossless "
+     "bake, and so does keep where a kept skin cannot reach --error (its weights are bytes)",
+     [](CommandLine& line, const std::string& text, double) {
+       line.encode.skins = text == "keep" ? EncodeSettings::Skins::keep : EncodeSettings::Skins::bake;
+     }},
+    {"--targets", nullptr, "MODE", kEncode, Kind::choice, 0, 0, false, "auto|keep|bake", 0,
+     "what a morph-target mesh (unskinned, one node) stores. keep: its targets, compressed, played by its own "
+     "weights animation; bake: its sampled frames, like a skinned mesh. auto (default): where a mesh has at most "
+     "half as many targets as frames, encode both ways and keep the smaller file (with --bpvf, the one with the "
+     "smaller error); never keep them with --lossless (kept targets are lossy)",
+     [](CommandLine& line, const std::string& text, double) {
+       line.encode.targets = text == "auto"   ? EncodeSettings::Targets::automatic
+                             : text == "keep" ? EncodeSettings::Targets::keep
+                                              : EncodeSettings::Targets::bake;
+     }},
+    {"--json", nullptr, nullptr, kInfo | kEncode | kVerify, Kind::flag, 0, 0, false, nullptr, 0,
+     "print one JSON object instead of text",
+     [](CommandLine& line, const std::string&, double) { line.json = true; }},
+    {"--quiet", "-q", nullptr, kEvery, Kind::flag, 0, 0, false, nullptr, 0, "no progress messages on stderr",
+     [](CommandLine& line, const std::string&, double) { line.quiet = true; }},
+    {"--help", "-h", nullptr, kEvery, Kind::flag, 0, 0, false, nullptr, 0, "this help",
+     [](CommandLine& line, const std::string&, double) { line.help = true; }},
+    {"--version", nullptr, nullptr, kEvery, Kind::flag, 0, 0, false, nullptr, 0, "print the version",
+     [](CommandLine& line, const std::string&, double) { line.version = true; }},
+};
+
+std::string number_text(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%g", value);
+  return buffer;
+}
+
+// "from 8 to 22", "more than 0 and at most 100", "auto, keep or bake".
+std::string range(const Option& option) {
+  if (option.kind == Kind::choice) {
+    std::string text = option.choices;
+    text.replace(text.rfind('|'), 1, " or ");
+    for (size_t bar = text.find('|'); bar != std::string::npos; bar = text.find('|', bar)) text.replace(bar, 1, ", ");
+    return text;
+  }
+  if (option.low_open) return "more than " + number_text(option.low) + " and at most " + number_text(option.high);
+  return "from " + number_text(option.low) + " to " + number_text(option.high);
+}
+
+std::string command_list(unsigned commands) {
+  std::string text;
+  for (unsigned c = 0; c < 5; ++c)
+    if (commands & (1u << c)) text += std::string(text.empty() ? "" : ", ") + kCommandNames[c];
+  return text;
+}
+
+// `text` wrapped to `width` columns, lines after the first indented by `indent`.
+std::string wrap(const std::string& text, size_t column, size_t indent, size_t width) {
+  std::string out;
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.size();
+    if (column + (end - start) > width) {
+      end = text.rfind(' ', start + (width - column));
+      if (end == std::string::npos || end <= start) end = text.find(' ', start);
+      if (end == std::string::npos) end = text.size();
+    }
+    out += text.substr(start, end - start);
+    start = end < text.size() ? end + 1 : end;
+    if (start < text.size()) out += "\n" + std::string(indent, ' '), column = indent;
+  }
+  return out;
+}
+
+std::string option_help(const Option& option) {
+  std::string names = std::string("  ") + (option.alias ? std::string(option.alias) + ", " : "") + option.name;
+  if (option.argument) names += std::string(" ") + (option.kind == Kind::choice ? option.choices : option.argument);
+  names.resize(std::max<size_t>(names.size() + 1, 21), ' ');
+  std::string help = option.help;
+  const size_t placeholder = help.find("{range}");
+  if (placeholder != std::string::npos) help.replace(placeholder, 7, range(option));
+  if (option.commands != kEvery) help = command_list(option.commands) + ": " + help;
+  return names + wrap(help, names.size(), 21, 110) + "\n";
+}
+
+const Option* find_option(const std::string& name) {
+  for (const Option& option : kOptions)
+    if (name == option.name || (option.alias && name == option.alias)) return &option;
+  return nullptr;
+}
+
+// Checks `text` against the option's kind and range and applies it; false with `error` set when it does not fit.
+bool apply(const Option& option, const std::string& text, CommandLine& line, std::string& error) {
+  double number = 0;
+  if (option.kind == Kind::number || option.kind == Kind::whole) {
+    char* end = nullptr;
+    number = option.kind == Kind::number ? std::strtod(text.c_str(), &end) : double(std::strtol(text.c_str(), &end, 10));
+    const bool below = option.low_open ? !(number > option.low) : !(number >= option.low);
+    if (end == text.c_str() || *end || below || !(number <= option.high)) {
+      error = std::string(option.name) + " takes a " + (option.kind == Kind::whole ? "whole " : "") + "number " +
+              range(option) + ", not '" + text + "'";
+      return false;
+    }
+  } else if (option.kind == Kind::choice) {
+    const std::string choices = std::string("|") + option.choices + "|";
+    if (text.empty() || text.find('|') != std::string::npos || choices.find("|" + text + "|") == std::string::npos) {
+      error = std::string(option.name) + " takes " + range(option) + ", not '" + text + "'";
+      return false;
+    }
+  }
+  option.apply(line, text, number);
+  return true;
+}
+
+// An option as given: `name` is how (-o or --output).
+struct Given {
+  const Option* option;
+  std::string name;
+};
+
+// The rules between options and the command's files, once all are read.
+bool check_command(CommandLine& line, const std::vector<Given>& given, std::string& error) {
+  unsigned command = 0;
+  for (unsigned c = 0; c < 5; ++c)
+    if (line.command == kCommandNames[c]) command = 1u << c;
+  if (!command) return error = "unknown command '" + line.command + "'", false;
+  for (const Given& option : given)
+    if (!(option.option->commands & command))
+      return error = option.name + " is not an option of " + line.command + " (it is for " +
+                     command_list(option.option->commands) + ")",
+             false;
+  const size_t inputs = command == kVerify ? 2 : 1;
+  if (line.inputs.size() != inputs)
+    return error = command == kVerify ? "verify takes two files: ORIGINAL COMPRESSED"
+                   : command == kInfo ? "info takes one file"
+                                      : line.command + " takes one input file",
+           false;
+  const bool frames_only = command == kDecode && !line.frames.empty() && line.output.empty();
+  if ((command & (kBake | kEncode | kDecode)) && !frames_only) {
+    if (line.output.empty()) return error = line.command + " needs -o OUT", false;
+    if (!has_gltf_extension(line.output)) return error = "the output must end in .glb or .gltf", false;
+  }
+  line.encode.sampling = line.sampling;
+  if (line.encode.targets == EncodeSettings::Targets::keep && line.encode.mode == RateMode::lossless)
+    return error = "--targets keep is lossy: it cannot be combined with --lossless", false;
+  if (line.encode.fast_decode && line.encode.mode == RateMode::lossless)
+    return error = "--fast-decode codes lossy residuals: it cannot be combined with --lossless", false;
+  return true;
+}
+
+}  // namespace
+
+std::string usage() {
+  std::string text = kCommands;
+  for (const Option& option : kOptions) text += option_help(option);
+  return text + kExitStatus;
+}
+
+ParseResult parse_command_line(int argc, const char* const* argv, CommandLine& line, std::string& error) {
+  std::vector<Given> given;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.size() < 2 || arg[0] != '-') {  // a command or a file ("-" included)
+      if (line.command.empty())
+        line.command = arg;
+      else
+        line.inputs.push_back(arg);
+      continue;
+    }
+    const size_t equals = arg.compare(0, 2, "--") == 0 ? arg.find('=') : std::string::npos;
+    const std::string name = arg.substr(0, equals);
+    const Option* option = find_option(name);
+    if (!option) return error = "unknown option " + name, ParseResult::usage_error;
+    std::string text;
+    if (option->kind == Kind::flag && equals != std::string::npos)
+      return error = name + " takes no value", ParseResult::usage_error;
+    if (option->kind != Kind::flag) {
+      if (equals != std::string::npos)
+        text = arg.substr(equals + 1);
+      else if (i + 1 < argc)
+        text = argv[++i];
+      else
+        return error = name + " needs " +
+                       (option->kind == Kind::text     ? std::string("a file name")
+                        : option->kind == Kind::choice ? range(*option)
+                                                       : std::string("a number")),
+               ParseResult::usage_error;
+    }
+    for (const Given& other : given)
+      if (option->group && other.option->group == option->group && other.option != option) {
+        std::string members;
+        for (const Option& o : kOptions)
+          if (o.group == option->group) members += std::string(members.empty() ? "" : ", ") + o.name;
+        return error = "give one of " + members.replace(members.rfind(", "), 2, " and "), ParseResult::usage_error;
+      }
+    if (!apply(*option, text, line, error)) return ParseResult::usage_error;
+    if (line.help) return ParseResult::help;
+    if (line.version) return ParseResult::version;
+    given.push_back({option, name});
+  }
+  if (line.command.empty()) return error.clear(), ParseResult::usage_error;
+  return check_command(line, given, error) ? ParseResult::run : ParseResult::usage_error;
+}
+
+}  // namespace segmorph
