@@ -5,6 +5,7 @@
 
 #include "motion_quantization.h"
 #include "rate_control.h"
+#include "rate_target.h"
 #include "reconstruction.h"
 
 namespace segmorph {
@@ -243,7 +244,7 @@ void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<float>&
     double budget = choice_.bits;
     for (int iteration = 0; iteration < 8; ++iteration) {
       const double actual = 8.0 * double(stream.size() + settings_.outside_bytes);
-      if (actual <= target_bits && actual >= 0.97 * target_bits) break;
+      if (actual <= target_bits && actual >= kBpvfLandingLow * target_bits) break;
       const double residual_actual = 8.0 * double(sizes_.residuals);
       const double residual_target = target_bits - (actual - residual_actual);
       if (!(residual_target > 0) || !(residual_actual > 0)) break;

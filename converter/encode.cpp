@@ -1,16 +1,16 @@
 // The whole-file encode (segmorph::encode, include/segmorph/segmorph.h): which meshes keep their morph targets or their
-// skins and which are baked into frames, the kept skins' track precision search, the second pass of a bpvf target,
-// and with targets automatic the choice between kept and baked targets.
+// skins and which are baked into frames, the second pass of a bpvf target, and with targets automatic the choice
+// between kept and baked targets. The kept skins' track search is kept_skins.cpp's; the margins, rate_target.h's.
 #include "encode.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 
 #include "bake.h"
-#include "comparison.h"
 #include "gltf_io.h"
+#include "kept_skins.h"
 #include "moving_meshes.h"
+#include "rate_target.h"
 #include "tracks.h"
 
 namespace segmorph {
@@ -44,9 +44,6 @@ struct EncodeChoices {
   bool keep_skins = true;
 };
 
-// A --bpvf result within this factor of its target meets it (the codec aims a little below).
-constexpr double kBpvfTolerance = 1.05;
-
 // Bits per vertex per frame are counted over Σ V × F of the sampled primitives and clips.
 double vertex_frames(const std::vector<SampledNode>& sampled) {
   double total = 0;
@@ -60,79 +57,6 @@ double vertex_frames(const std::vector<SampledNode>& sampled) {
 // target (a kept skin's error is searched for; --bpvf rate control and --lossless are the codec's, on baked frames).
 bool keeps_skin(const AnimatedNode& node, const EncodeChoices& choices) {
   return choices.keep_skins && choices.codec.mode == RateMode::error && node.skin >= 0 && !node.morphed;
-}
-
-// Draco's share of the KG error target in the meshes compress_moving_meshes takes.
-constexpr double kMovingMeshErrorShare = 0.6;
-// The tracks' quantization distance (TrackPrecision) where nothing measured depends on it: this fraction of the
-// error target times the scene's diagonal, about what the search below settles on for kept skins.
-constexpr double kTrackDistanceRatio = 0.25;
-// The search for kept skins: KG within kSearchGoal of the target; a bracket in at most kSearchBracketRounds
-// doublings or halvings, then kSearchHalvings bisections of it (in log distance).
-constexpr double kSearchGoal = 0.99;
-constexpr int kSearchBracketRounds = 8, kSearchHalvings = 4;
-
-// The KG error target (%) the meshes and tracks outside the codec aim at: --error's, else the default one.
-double error_target(const CodecSettings& codec) {
-  return codec.mode == RateMode::error ? codec.target : CodecSettings().target;
-}
-
-// The worst KG error (%) of `encoded` against the file it was encoded from, as verify measures it.
-Status measured_kg(const SampledFile& file, tinygltf::Model encoded, double& kg) {
-  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(encoded));
-  Scene scene;
-  SEGMORPH_RETURN_IF_ERROR(analyze_scene(encoded, scene));
-  AnimationComparison comparison;
-  SEGMORPH_RETURN_IF_ERROR(compare_animation(file.model, file.scene, file.sampled, encoded, scene, comparison));
-  kg = comparison.worst.kg_percent;
-  return Status::Ok();
-}
-
-// Codes the tracks of `out.model` (whose kept skins depend on them): with --error, the coarsest quantization
-// distance (a factor of 2 apart, then halved 4 times) whose measured KG is within the target; otherwise the rule
-// of kTrackDistanceRatio.
-Status encode_tracks_for(const SampledFile& file, const CodecSettings& codec, bool measured, Encoded& out) {
-  const double first = kTrackDistanceRatio * error_target(codec) / 100 * scene_diagonal(out.model);
-  auto encode = [&](double distance, Encoded& result, TrackReport& report) {
-    result.model = out.model;
-    report = TrackReport();
-    return compress_tracks(result.model, TrackPrecision{distance}, report);
-  };
-  TrackReport report;
-  if (!measured || codec.mode != RateMode::error) {
-    SEGMORPH_RETURN_IF_ERROR(encode(first, out, report));
-    out.report.animation_bytes += report.bytes;
-    return Status::Ok();
-  }
-  const double goal = kSearchGoal * codec.target;
-  Encoded candidate;
-  double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
-  auto within_goal = [&](double distance, bool& ok) {
-    SEGMORPH_RETURN_IF_ERROR(encode(distance, candidate, report));
-    SEGMORPH_RETURN_IF_ERROR(measured_kg(file, candidate.model, kg));
-    ok = kg <= goal;
-    return Status::Ok();
-  };
-  bool ok = false;
-  double distance = first;
-  for (int round = 0; round < kSearchBracketRounds; ++round) {
-    SEGMORPH_RETURN_IF_ERROR(within_goal(distance, ok));
-    (ok ? within : beyond) = distance;
-    if (within > 0 && beyond > 0) break;
-    distance = ok ? distance * 2 : distance / 2;
-  }
-  if (within == 0) {  // the error is not the tracks' (a kept skin's weights are bytes): the caller bakes instead
-    out.kept_skins_floor = kg;
-    return Status::Ok();
-  }
-  for (int round = 0; beyond > 0 && round < kSearchHalvings; ++round) {
-    distance = std::sqrt(within * beyond);
-    SEGMORPH_RETURN_IF_ERROR(within_goal(distance, ok));
-    (ok ? within : beyond) = distance;
-  }
-  SEGMORPH_RETURN_IF_ERROR(encode(within, out, report));
-  out.report.animation_bytes += report.bytes;
-  return Status::Ok();
 }
 
 // Encodes a copy of file's model with `codec`: the nodes `keep` marks keep their morph targets, skinned nodes whose
@@ -165,7 +89,11 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
                                                   step_ratio, rigid_spread, meshes));
   out.report.draco_bytes += meshes.bytes;
   say(kept_skins.empty() ? "coding the animation tracks" : "coding the animation tracks, measuring the kept skins' error");
-  return encode_tracks_for(file, codec, !kept_skins.empty(), out);
+  TrackCoding tracks;
+  SEGMORPH_RETURN_IF_ERROR(code_tracks(file, codec, !kept_skins.empty(), out.model, tracks));
+  out.report.animation_bytes += tracks.bytes;
+  out.kept_skins_floor = tracks.kept_skins_floor;
+  return Status::Ok();
 }
 
 // encode_model_once, and with --bpvf a second time: the rate is of the whole file, and the codec budgets only its

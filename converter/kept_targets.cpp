@@ -13,10 +13,11 @@ namespace segmorph {
 namespace {
 
 // Kept morph targets (compress_targets): at most kTargetRounds encodes, stopping once the animation's KG is within
-// kTargetsCloseEnough of the goal; the targets' error target moves by at most kTargetsMaxRatio per round and stays
-// below kTargetsMaxError (%), which is reached when the weights hardly use the targets.
+// kCloseEnough (rate_target.h) of the goal; the targets' error target moves by at most kTargetsMaxRatio per round,
+// a little further (kTargetsOvershootStep) when the last one was above the goal, and stays below kTargetsMaxError (%),
+// which is reached when the weights hardly use the targets.
 constexpr int kTargetRounds = 8;
-constexpr double kTargetsCloseEnough = 0.93, kTargetsMaxRatio = 3, kTargetsMaxError = 20;
+constexpr double kTargetsMaxRatio = 3, kTargetsMaxError = 20, kTargetsOvershootStep = 0.97;
 
 // The KG error (%) of the animation a primitive plays with its decoded targets, against `reordered`, the sampled
 // original frames in the decoded vertex order.
@@ -103,9 +104,9 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
           best = encoding;
           found = true;
         }
-        if (found && kg >= kTargetsCloseEnough * goal) break;
+        if (found && kg >= kCloseEnough * goal) break;
         const double ratio = kg > 0 ? goal / kg : kTargetsMaxRatio;
-        target = std::min(target * std::clamp(ratio * (kg > goal ? 0.97 : 1.0), 1 / kTargetsMaxRatio, kTargetsMaxRatio),
+        target = std::min(target * std::clamp(ratio * (kg > goal ? kTargetsOvershootStep : 1.0), 1 / kTargetsMaxRatio, kTargetsMaxRatio),
                           kTargetsMaxError);
         if (found && target <= target_settings.target) break;  // no coarser setting left to try
       }

@@ -11,12 +11,10 @@
 #include "accessor.h"
 #include "codec.h"
 #include "draco_base_mesh.h"
+#include "rate_target.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {
-
-// The codec's error target relative to the user's (see compress_model).
-constexpr double kErrorTargetMargin = 0.99;
 
 // One primitive on its way out: its base mesh through Draco, its frames through the codec.
 struct PrimitiveEncoding {

@@ -1,0 +1,28 @@
+// The tracks of an encoded file, and the search that brings kept skins within an error target. A kept skin (the mesh
+// with its joints and weights in Draco) has no codec stream: its error is its tracks' quantization and its weights'
+// (bytes), measured on the decoded file as verify measures it.
+#pragma once
+
+#include <tiny_gltf.h>
+
+#include "codec.h"
+#include "pipeline.h"
+#include "segmorph/status.h"
+
+namespace segmorph {
+
+struct TrackCoding {
+  size_t bytes = 0;  // the track stream's
+  // > 0 when no track precision brings the kept skins within the target: the KG % they stay at. The tracks are then
+  // not coded (the caller bakes the skins instead).
+  double kept_skins_floor = 0;
+};
+
+// Codes the translation, rotation and scale tracks of `model`, an encode of file's model. With `kept_skins` and an
+// error target: at the coarsest quantization distance whose measured worst KG is within kErrorTargetMargin of the
+// target (a bracket by doublings or halvings, then bisections in log distance); otherwise at a distance in
+// proportion to the error target and the scene's diagonal.
+Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kept_skins, tinygltf::Model& model,
+                   TrackCoding& coding);
+
+}  // namespace segmorph
