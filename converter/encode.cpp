@@ -101,45 +101,45 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
 // first encode, comes off the codec's target.
 Status encode_model(const SampledFile& file, const std::vector<bool>& keep, const EncodeChoices& choices,
                     const Progress& progress, Encoded& out) {
-  const CodecSettings& target = choices.codec;
-  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, target, choices, progress, out));
+  const CodecSettings& codec = choices.codec;  // the file's target
+  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, codec, choices, progress, out));
   if (out.kept_skins_floor > 0) {
     char line[200];
     std::snprintf(line, sizeof(line),
                   "kept skins stay at KG %.4f %% even with the finest tracks, above --error %g (their weights are "
                   "bytes): baking them instead",
-                  out.kept_skins_floor, target.target);
+                  out.kept_skins_floor, codec.target);
     report_progress(progress, line);
     EncodeChoices baked = choices;
     baked.keep_skins = false;
     const double floor = out.kept_skins_floor;
-    SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, target, baked, progress, out));
+    SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, codec, baked, progress, out));
     out.kept_skins_floor = floor;
   }
-  if (target.mode != RateMode::bpvf) return Status::Ok();
+  if (codec.mode != RateMode::bpvf) return Status::Ok();
   const double frames = vertex_frames(file.sampled);
   const size_t coded = out.report.draco_bytes + out.report.animation_bytes, whole = glb_size(out.model);
   const double rest = 8.0 * double(whole > coded ? whole - coded : 0) / frames;
   char figures[200];
   std::snprintf(figures, sizeof(figures), "%.3f bpvf, of which %.3f outside the animation streams and base meshes",
                 8.0 * double(whole) / frames, rest);
-  if (rest >= target.target) {
+  if (rest >= codec.target) {
     char rate[32];
-    std::snprintf(rate, sizeof(rate), "%g", target.target);
+    std::snprintf(rate, sizeof(rate), "%g", codec.target);
     return Status(StatusCode::invalid_argument, std::string("--bpvf ") + rate +
                                                     " is below what the rest of the file takes alone: the first "
                                                     "encode came to " +
                                                     figures);
   }
   report_progress(progress, std::string("first encode: ") + figures + "; encoding again for the whole file's rate");
-  CodecSettings codec = target;
-  codec.target -= rest;
-  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, codec, choices, progress, out));
+  CodecSettings streams = codec;  // the streams' and base meshes' share of it
+  streams.target -= rest;
+  SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, streams, choices, progress, out));
   const double reached = 8.0 * double(glb_size(out.model)) / frames;
-  if (reached > kBpvfTolerance * target.target) {
+  if (reached > kBpvfTolerance * codec.target) {
     char line[200];
     std::snprintf(line, sizeof(line), "warning: --bpvf %g is out of reach for this file: it comes to %.3f bpvf",
-                  target.target, reached);
+                  codec.target, reached);
     report_progress(progress, line);
   }
   return Status::Ok();
