@@ -214,13 +214,15 @@ Status code_head(Coder& coder, Models& models, const std::vector<float>& base, S
   return Status::Ok();
 }
 
-// The residual quantizer steps, one per axis (lossless streams: not used).
+// The residual quantizer steps, one per axis (lossless streams: not used). The encoder writes streams without
+// residuals only to measure everything else (their steps are not chosen yet): the writer checks the steps of a stream
+// that has residuals, the reader those of every stream.
 template <class Coder>
 Status code_residual_steps(Coder& coder, StreamContent& content) {
-  const bool lossless = content.flags & format::kFlagLossless;
+  const bool checked = !(content.flags & format::kFlagLossless) && (Coder::kReading || !content.residuals.empty());
   for (int axis = 0; axis < 3; ++axis) {
     coder.float_bits(content.residual_step[axis]);
-    if (!lossless && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
+    if (checked && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
       return corrupt("bad residual quantizer step");
   }
   return coder.failed() ? coder.status() : Status::Ok();
