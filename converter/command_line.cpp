@@ -76,6 +76,10 @@ const Option kOptions[] = {
     {"--output", "-o", "FILE", kBake | kEncode | kDecode, Kind::text, 0, 0, false, nullptr, 0,
      "output file (.glb: binary; .gltf: JSON with FILE's name .bin beside it)",
      [](CommandLine& line, const std::string& text, double) { line.output = text; }},
+    {"--force", nullptr, nullptr, kBake | kEncode | kDecode, Kind::flag, 0, 0, false, nullptr, 0,
+     "replace the output even where it is the input or a file the input reads (its .bin, its images); the "
+     "replacement is atomic",
+     [](CommandLine& line, const std::string&, double) { line.force = true; }},
     {"--frames", nullptr, "FILE", kDecode, Kind::text, 0, 0, false, nullptr, 0,
      "also write the decoded frames as raw float32 (see decode)",
      [](CommandLine& line, const std::string& text, double) { line.frames = text; }},

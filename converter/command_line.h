@@ -19,6 +19,7 @@ struct CommandLine {
   EncodeSettings encode;  // its sampling is `sampling`
   bool json = false;
   bool quiet = false;
+  bool force = false;  // an output may replace the input
   bool help = false, version = false;
 };
 

@@ -16,8 +16,11 @@
 #include <set>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "accessor.h"
 #include "json_prepass.h"
+#include "output_file.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {
@@ -425,32 +428,6 @@ void repack(tinygltf::Model& model) {
   if (!packed.data.empty()) model.buffers.push_back(std::move(packed));
 }
 
-Status save_file(const std::string& path, const void* data, size_t size) {
-  std::string temporary = path + ".segmorph-XXXXXX";
-  const int descriptor = mkstemp(&temporary[0]);
-  if (descriptor < 0) return Status(StatusCode::io_error, "cannot write " + path + ": " + std::strerror(errno));
-  // mkstemp makes the file private; the output gets the permissions any new file would.
-  const mode_t mask = umask(0);
-  umask(mask);
-  fchmod(descriptor, 0666 & ~mask);
-  const char* bytes = static_cast<const char*>(data);
-  size_t done = 0;
-  while (done < size) {
-    const ssize_t written = write(descriptor, bytes + done, size - done);
-    if (written < 0 && errno == EINTR) continue;
-    if (written <= 0) break;
-    done += size_t(written);
-  }
-  const bool ok = done == size && fsync(descriptor) == 0;
-  const std::string reason = std::strerror(errno);
-  if (close(descriptor) != 0 || !ok || std::rename(temporary.c_str(), path.c_str()) != 0) {
-    const std::string why = ok ? std::strerror(errno) : reason;
-    std::remove(temporary.c_str());
-    return Status(StatusCode::io_error, "cannot write " + path + ": " + why);
-  }
-  return Status::Ok();
-}
-
 size_t glb_size(tinygltf::Model model) {
   repack(model);
   shorten_float_numbers(model);
@@ -460,31 +437,11 @@ size_t glb_size(tinygltf::Model model) {
   return writer.WriteGltfSceneToStream(&model, stream, false, true) ? stream.str().size() : 0;
 }
 
-Status save_gltf(tinygltf::Model& model, const std::string& path) {
-  const bool binary = ends_with(path, ".glb");
-  if (!binary && !ends_with(path, ".gltf"))
-    return Status(StatusCode::invalid_argument, "output must end in .glb or .gltf");
-  repack(model);
-  shorten_float_numbers(model);
+namespace {
 
-  const size_t slash = path.find_last_of('/');
-  const std::string directory = slash == std::string::npos ? "." : path.substr(0, slash);
-  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-  std::string temporary = directory + "/.segmorph-XXXXXX";
-  if (!mkdtemp(&temporary[0]))
-    return Status(StatusCode::io_error, "cannot write in " + directory + ": " + std::strerror(errno));
-
-  const std::string stem = name.substr(0, name.find_last_of('.'));
-  const std::string written = temporary + "/" + name;
-  const std::string written_bin = temporary + "/" + stem + ".bin";
-  auto clean_up = [&] {
-    std::remove(written.c_str());
-    std::remove(written_bin.c_str());
-    rmdir(temporary.c_str());
-  };
-
-  // tinygltf writes an object with no properties as null, which is invalid glTF; an empty node or scene
-  // (valid, and left behind when a skinned node's mesh moves to its baked node) gets its index as a name.
+// tinygltf writes an object with no properties as null, which is invalid glTF; an empty node or scene (valid, and
+// left behind when a skinned node's mesh moves to its baked node) gets its index as a name.
+void name_empty_objects(tinygltf::Model& model) {
   for (size_t n = 0; n < model.nodes.size(); ++n) {
     tinygltf::Node& node = model.nodes[n];
     if (node.name.empty() && node.mesh < 0 && node.skin < 0 && node.camera < 0 && node.children.empty() &&
@@ -498,23 +455,56 @@ Status save_gltf(tinygltf::Model& model, const std::string& path) {
         scene.extras.Type() == tinygltf::NULL_TYPE)
       scene.name = "scene " + std::to_string(s);
   }
+}
 
+// The JSON of a .gltf whose one buffer (repack's) is the file `bin_name` beside it, as tinygltf writes it (sorted
+// keys, two spaces, a final newline). The buffer's bytes stay out of the JSON text: tinygltf would otherwise
+// write them as a data URI.
+std::string gltf_json(tinygltf::Model& model, tinygltf::TinyGLTF& writer, const std::string& bin_name) {
+  std::vector<unsigned char> data;
+  if (!model.buffers.empty()) data.swap(model.buffers[0].data);
+  std::ostringstream text;
+  writer.WriteGltfSceneToStream(&model, text, true, false);
+  if (model.buffers.empty()) return text.str();
+  const size_t size = data.size();
+  model.buffers[0].data.swap(data);
+  nlohmann::json json = nlohmann::json::parse(text.str());
+  json["buffers"][0]["byteLength"] = size;
+  json["buffers"][0]["uri"] = bin_name;
+  return json.dump(2) + "\n";
+}
+
+}  // namespace
+
+Status save_gltf(tinygltf::Model& model, const std::string& path) {
+  const bool binary = ends_with(path, ".glb");
+  if (!binary && !ends_with(path, ".gltf"))
+    return Status(StatusCode::invalid_argument, "output must end in .glb or .gltf");
+  repack(model);
+  shorten_float_numbers(model);
+  name_empty_objects(model);
   tinygltf::TinyGLTF writer;
   writer.SetImageWriter(write_no_image, nullptr);
-  if (!binary && !model.buffers.empty()) model.buffers[0].uri.clear();  // tinygltf names it <stem>.bin
-  if (!writer.WriteGltfSceneToFile(&model, written, false, false, !binary, binary)) {
-    clean_up();
-    return Status(StatusCode::io_error, "cannot write " + path);
+
+  OutputFile file, bin;
+  SEGMORPH_RETURN_IF_ERROR(file.open(path));
+  if (binary) {
+    writer.WriteGltfSceneToStream(&model, file.stream(), false, true);
+    SEGMORPH_RETURN_IF_ERROR(file.finish());
+    return file.commit();
   }
-  const std::string final_bin = directory + "/" + stem + ".bin";
-  if ((!binary && !model.buffers.empty() && std::rename(written_bin.c_str(), final_bin.c_str()) != 0) ||
-      std::rename(written.c_str(), path.c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
-    clean_up();
-    return Status(StatusCode::io_error, "cannot write " + path + ": " + reason);
-  }
-  clean_up();
-  return Status::Ok();
+  // .gltf: the JSON and <stem>.bin beside it, both written whole before either is renamed into place.
+  const size_t slash = path.find_last_of('/');
+  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::string bin_name = name.substr(0, name.find_last_of('.')) + ".bin";
+  file.stream() << gltf_json(model, writer, bin_name);
+  SEGMORPH_RETURN_IF_ERROR(file.finish());
+  if (model.buffers.empty()) return file.commit();
+  SEGMORPH_RETURN_IF_ERROR(bin.open(path.substr(0, path.size() - name.size()) + bin_name));
+  bin.stream().write(reinterpret_cast<const char*>(model.buffers[0].data.data()),
+                     std::streamsize(model.buffers[0].data.size()));
+  SEGMORPH_RETURN_IF_ERROR(bin.finish());
+  return OutputFile::commit(bin, file);
 }
 
 }  // namespace segmorph

@@ -22,12 +22,8 @@ void repack(tinygltf::Model& model);
 
 // Repacks `model` and writes it to `path`, binary if it ends in .glb, JSON with a .bin beside it if it ends
 // in .gltf. Numbers glTF defines as floats that hold a float exactly are written in the fewest digits that read
-// back as that float. The files appear whole or not at all: they are written under temporary names and renamed.
+// back as that float. The files appear whole or not at all (output_file.h): a full disk or a signal leaves nothing.
 Status save_gltf(tinygltf::Model& model, const std::string& path);
-
-// Writes `size` bytes to `path` whole or not at all: into a temporary file beside it, flushed and synced, then
-// renamed; any failure (a full disk included) leaves no file and returns io_error.
-Status save_file(const std::string& path, const void* data, size_t size);
 
 // The bytes save_gltf would write for `model` as a .glb (images that are files included as it embeds them).
 size_t glb_size(tinygltf::Model model);

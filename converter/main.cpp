@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "command_line.h"
+#include "output_file.h"
 #include "segmorph/segmorph.h"
 #include "segmorph/version.h"
 
@@ -52,6 +53,15 @@ Status load(const std::string& path, const CommandLine& options, Model& model) {
   SEGMORPH_RETURN_IF_ERROR(Model::load(path, model, &warnings));
   for (const std::string& warning : warnings) progress(options, "warning: " + path + ": " + warning);
   return Status::Ok();
+}
+
+// bake, encode and decode do not write over their own input (or a file it reads) unless --force: a usage error.
+int refuse_replacing_input(const CommandLine& options, const Model& input) {
+  for (const std::string* output : {&options.output, &options.frames})
+    if (!output->empty() && writes_over(*output, options.inputs[0], input))
+      return usage_error(*output + " would replace the input " + options.inputs[0] +
+                         " or a file it reads; give --force to replace it");
+  return 0;
 }
 
 Progress progress_of(const CommandLine& options) {
@@ -112,6 +122,8 @@ int run_bake(const CommandLine& options) {
   Model model;
   BakeReport report;
   Status status = load(path, options, model);
+  if (status.ok() && !options.force)
+    if (const int refused = refuse_replacing_input(options, model)) return refused;
   if (status.ok()) status = bake(model, options.sampling, &report, progress_of(options));
   if (!status.ok()) return fail(path, status);
   progress(options, "writing " + options.output);
@@ -127,6 +139,8 @@ int run_encode(const CommandLine& options) {
   Model input, output;
   EncodeReport report;
   Status status = load(path, options, input);
+  if (status.ok() && !options.force)
+    if (const int refused = refuse_replacing_input(options, input)) return refused;
   if (status.ok()) status = encode(input, options.encode, output, &report, progress_of(options));
   if (!status.ok()) return fail(path, status);
   progress(options, "writing " + options.output);
@@ -172,6 +186,8 @@ int run_decode(const CommandLine& options) {
   DecodeReport report;
   std::vector<DecodedFrames> decoded;
   Status status = load(path, options, model);
+  if (status.ok() && !options.force)
+    if (const int refused = refuse_replacing_input(options, model)) return refused;
   if (status.ok()) status = decode(model, &report, options.frames.empty() ? nullptr : &decoded);
   if (!status.ok()) return fail(path, status);
   if (report.primitives == 0 && report.coded_animations == 0)
@@ -260,5 +276,6 @@ int run(int argc, char** argv) {
 }  // namespace segmorph
 
 int main(int argc, char** argv) {
+  segmorph::remove_temporary_files_on_signals();
   return segmorph::run(argc, argv);
 }

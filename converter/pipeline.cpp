@@ -2,6 +2,7 @@
 // and verify over the converter's stages.
 #include "pipeline.h"
 
+#include <cctype>
 #include <cstdio>
 #include <cstring>
 
@@ -9,6 +10,7 @@
 #include "comparison.h"
 #include "encode.h"
 #include "gltf_io.h"
+#include "output_file.h"
 #include "topology.h"
 
 namespace segmorph {
@@ -35,23 +37,45 @@ Status Model::save(const std::string& path) { return save_gltf(data_->gltf, path
 
 size_t Model::glb_size() const { return segmorph::glb_size(data_->gltf); }
 
-size_t file_bytes(const std::string& path, const Model& model) {
-  auto size_of = [](const std::string& file) -> size_t {
-    std::FILE* handle = std::fopen(file.c_str(), "rb");
-    if (!handle) return 0;
-    std::fseek(handle, 0, SEEK_END);
-    const long size = std::ftell(handle);
-    std::fclose(handle);
-    return size > 0 ? size_t(size) : 0;
-  };
-  size_t total = size_of(path);
+namespace {
+
+// The file at `path` and the files its buffers and images name.
+std::vector<std::string> files_of(const std::string& path, const Model& model) {
+  std::vector<std::string> files = {path};
   const size_t slash = path.find_last_of('/');
   const std::string directory = slash == std::string::npos ? "" : path.substr(0, slash + 1);
   for (const tinygltf::Buffer& buffer : model.data().gltf.buffers)
-    if (!buffer.uri.empty() && buffer.uri.rfind("data:", 0) != 0) total += size_of(directory + buffer.uri);
+    if (!buffer.uri.empty() && buffer.uri.rfind("data:", 0) != 0) files.push_back(directory + buffer.uri);
   for (const tinygltf::Image& image : model.data().gltf.images)
-    if (!image.uri.empty() && image.uri.rfind("data:", 0) != 0) total += size_of(directory + image.uri);
+    if (!image.uri.empty() && image.uri.rfind("data:", 0) != 0) files.push_back(directory + image.uri);
+  return files;
+}
+
+}  // namespace
+
+size_t file_bytes(const std::string& path, const Model& model) {
+  size_t total = 0;
+  for (const std::string& file : files_of(path, model)) {
+    std::FILE* handle = std::fopen(file.c_str(), "rb");
+    if (!handle) continue;
+    std::fseek(handle, 0, SEEK_END);
+    const long size = std::ftell(handle);
+    std::fclose(handle);
+    total += size > 0 ? size_t(size) : 0;
+  }
   return total;
+}
+
+bool writes_over(const std::string& output, const std::string& input_path, const Model& input) {
+  std::vector<std::string> written = {output};
+  const size_t dot = output.find_last_of('.');
+  std::string extension = dot == std::string::npos ? "" : output.substr(dot);
+  for (char& c : extension) c = char(std::tolower((unsigned char)c));
+  if (extension == ".gltf") written.push_back(output.substr(0, dot) + ".bin");  // save() writes it beside
+  for (const std::string& file : files_of(input_path, input))
+    for (const std::string& out : written)
+      if (same_file(file, out)) return true;
+  return false;
 }
 
 Status analyze_model(const tinygltf::Model& model, const SampleSettings& settings, bool sample,

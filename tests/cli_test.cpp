@@ -1,14 +1,18 @@
 // The command-line tool as a user meets it: exit codes, one-line errors, no partial output.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <regex>
 #include <sstream>
+#include <thread>
 
 #include "accessor.h"
 #include "gltf_io.h"
@@ -318,6 +322,129 @@ TEST(Cli, UnwritableOutputFailsCleanly) {
       run("bake -q " + sample("SimpleSkin/SimpleSkin.gltf") + " -o " + temporary_path("no/such/dir/out.glb"));
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+}
+
+// `command` run by bash, its output and exit status.
+Result run_shell(const std::string& command) {
+  const std::string out = temporary_path("shell.out"), err = temporary_path("shell.err");
+  const std::string line = "bash -c '" + command + "' >" + out + " 2>" + err + " </dev/null";
+  const int status = std::system(line.c_str());
+  Result result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.out = read_text(out);
+  result.err = read_text(err);
+  return result;
+}
+
+// A write that fails part way (the file size limit of the process, as a full disk would) is an error of one line,
+// exit 1, and leaves neither the output nor a temporary file: for bake, encode and decode, .glb and .gltf (both of
+// its files), and decode --frames.
+TEST(Cli, FailedWritesLeaveNothing) {
+  const std::string directory = output_directory("failed-writes");
+  const std::string encoded = directory + "/../failed-writes-input.glb";
+  ASSERT_EQ(run("encode -q --skins bake " + sample("Fox/Fox.glb") + " -o " + encoded).exit_code, 0);
+  const std::string segmorph = SEGMORPH_BINARY;
+  const std::vector<std::string> commands = {
+      "bake -q " + sample("Fox/Fox.glb") + " -o " + directory + "/out.glb",
+      "bake -q " + sample("Fox/Fox.glb") + " -o " + directory + "/out.gltf",
+      "encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/out.glb",
+      "encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/out.gltf",
+      "decode -q " + encoded + " -o " + directory + "/out.glb",
+      "decode -q " + encoded + " -o " + directory + "/out.gltf",
+      "decode -q " + encoded + " --frames " + directory + "/frames.bin",
+  };
+  for (const std::string& command : commands) {
+    // Files grow past 16 KiB only by failing writes (EFBIG; the signal that would end the process is ignored).
+    const Result result = run_shell("trap \"\" XFSZ; ulimit -f 16; exec " + segmorph + " " + command);
+    EXPECT_EQ(result.exit_code, 1) << command << "\n" << result.err;
+    EXPECT_NE(result.err.find("cannot write"), std::string::npos) << command << "\n" << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_TRUE(fs::is_empty(directory)) << command << " left files behind";
+    fs::remove_all(directory);
+    fs::create_directories(directory);
+  }
+  // A full file system where the machine lets a user mount one (a tmpfs in a user namespace).
+  if (run_shell("unshare -rm true").exit_code != 0) {
+    std::printf("note: no user namespaces here; the full tmpfs part is skipped (the file size limit above ran)\n");
+    return;
+  }
+  for (const std::string& command : {commands[0], commands[3], commands[5]}) {
+    const Result result = run_shell("unshare -rm sh -c \"mount -t tmpfs -o size=12k tmpfs " + directory + " && " +
+                                    segmorph + " " + command + "; echo exit \\$?; ls -A " + directory + "\"");
+    EXPECT_NE(result.out.find("exit 1\n"), std::string::npos) << command << "\n" << result.out << result.err;
+    EXPECT_EQ(result.out.substr(result.out.find("exit 1\n") + 7), "") << command << " left files behind";
+    EXPECT_NE(result.err.find("No space left on device"), std::string::npos) << result.err;
+  }
+}
+
+// An output that is the input, a link to it or a file it reads is refused before any work (exit 2, the input
+// unchanged) unless --force, which replaces it.
+TEST(Cli, OutputThatIsTheInputIsRefusedWithoutForce) {
+  const std::string directory = output_directory("same-file");
+  fs::copy_file(sample("Fox/Fox.glb"), directory + "/fox.glb");
+  fs::create_symlink(directory + "/fox.glb", directory + "/link.glb");
+  const std::string original = read_text(directory + "/fox.glb");
+  for (const char* command : {"encode", "bake", "decode"})
+    for (const char* output : {"fox.glb", "link.glb"}) {
+      const Result result = run(std::string(command) + " -q " + directory + "/fox.glb -o " + directory + "/" + output);
+      EXPECT_EQ(result.exit_code, 2) << command << " " << output;
+      EXPECT_NE(result.err.find("would replace the input"), std::string::npos) << result.err;
+      EXPECT_NE(result.err.find("--force"), std::string::npos) << result.err;
+    }
+  EXPECT_EQ(read_text(directory + "/fox.glb"), original);
+  // A .gltf output whose .bin is the input's buffer.
+  simple_morph_in(directory);
+  write_text(directory + "/morph.gltf", read_text(sample("SimpleMorph/SimpleMorph.gltf")));
+  const std::string geometry = read_text(directory + "/simpleMorphGeometry.bin");
+  EXPECT_EQ(run("bake -q " + directory + "/morph.gltf -o " + directory + "/simpleMorphGeometry.gltf").exit_code, 2);
+  EXPECT_EQ(read_text(directory + "/simpleMorphGeometry.bin"), geometry);
+  EXPECT_FALSE(fs::exists(directory + "/simpleMorphGeometry.gltf"));
+  // With --force the input is replaced by the encode, atomically, and nothing else is left.
+  ASSERT_EQ(run("encode -q --force " + directory + "/fox.glb -o " + directory + "/fox.glb").exit_code, 0);
+  EXPECT_NE(read_text(directory + "/fox.glb"), original);
+  EXPECT_NE(read_text(directory + "/fox.glb").find("SEGMORPH_animation_compression"), std::string::npos);
+  size_t hidden = 0;
+  for (const auto& entry : fs::directory_iterator(directory)) hidden += entry.path().filename().string()[0] == '.';
+  EXPECT_EQ(hidden, 0u);
+}
+
+// SIGINT or SIGTERM at any point of a bake (reading, baking, writing, done) leaves no temporary file, and either no
+// output or a whole one.
+TEST(Cli, SignalsLeaveNoPartialOutput) {
+  const std::string directory = output_directory("signals");
+  const std::string output = directory + "/out.glb";
+  int interrupted = 0;
+  for (int signal_number : {SIGTERM, SIGINT})
+    for (int delay_ms : {0, 20, 60, 120, 200, 300, 450, 700, 1000, 1500}) {
+      SCOPED_TRACE("signal " + std::to_string(signal_number) + " after " + std::to_string(delay_ms) + " ms");
+      const std::string fox = sample("Fox/Fox.glb");
+      const char* argv[] = {SEGMORPH_BINARY, "bake", "-q", fox.c_str(), "-o", output.c_str(), "--fps", "120", nullptr};
+      const pid_t pid = fork();
+      ASSERT_GE(pid, 0);
+      if (pid == 0) {
+        execv(argv[0], const_cast<char* const*>(argv));
+        _exit(127);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+      kill(pid, signal_number);
+      int status = 0;
+      ASSERT_EQ(waitpid(pid, &status, 0), pid);
+      std::vector<std::string> left;
+      for (const auto& entry : fs::directory_iterator(directory)) left.push_back(entry.path().filename());
+      if (WIFSIGNALED(status)) {
+        ++interrupted;
+        EXPECT_EQ(WTERMSIG(status), signal_number);
+        EXPECT_TRUE(left.empty()) << left.size() << " files left, the first " << left[0];
+      } else {
+        ASSERT_TRUE(WIFEXITED(status));
+        EXPECT_EQ(WEXITSTATUS(status), 0);
+        ASSERT_EQ(left, std::vector<std::string>{"out.glb"});
+        EXPECT_EQ(run("info -q " + output).exit_code, 0) << "a whole file";
+      }
+      fs::remove_all(directory);
+      fs::create_directories(directory);
+    }
+  EXPECT_GT(interrupted, 0) << "no signal came before the end: the test did not test";
 }
 
 TEST(Cli, BakeWritesGlbAndGltfAndNothingElse) {

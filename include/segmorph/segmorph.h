@@ -56,6 +56,10 @@ class Model {
 // Bytes of the file at `path` and of the files its buffers and images name (a .gltf's .bin): what a server sends.
 size_t file_bytes(const std::string& path, const Model& model);
 
+// True when saving to `output` would write over `input_path` or a file the model loaded from it reads (a .gltf's
+// .bin, its images), through links too: the save would replace its own source.
+bool writes_over(const std::string& output, const std::string& input_path, const Model& input);
+
 // How animation is sampled into frames (docs/baking.md).
 struct SampleSettings {
   // Frames per second of a regular grid; 0 selects the default: the union of the clip's key times when there are at
