@@ -159,7 +159,7 @@ Status decode_draco_base_mesh(const uint8_t* data, size_t size, const std::map<s
   return Status::Ok();
 }
 
-// At most kMaxCandidates originals within a step are considered for each decoded vertex (see
+// At most kMaxCandidates originals within the search radius are considered for each decoded vertex (see
 // match_decoded_vertices), the cheapest of at most kMaxScanned found there: where thousands of originals share a
 // step (a dense part, a part collapsed to a point), nearness cannot choose among them anyway, and scanning them all
 // for every vertex would take time quadratic in their number.
@@ -167,7 +167,7 @@ constexpr size_t kMaxCandidates = 16, kMaxScanned = 1024;
 
 namespace {
 
-// The search behind match_decoded_vertices: a grid of the originals' positions in cells of one quantization step, the
+// The search behind match_decoded_vertices: a grid of the originals' positions in cells of the search radius, the
 // cost of a pairing, the candidates of a decoded vertex, and the triangle-by-triangle matching, surest first.
 class VertexMatcher {
  public:
@@ -182,7 +182,7 @@ class VertexMatcher {
   // Cell coordinates hashed in unsigned arithmetic, and 0 for a cell beyond ±2^62 (or NaN): no overflow for any
   // float.
   int64_t cell(const float* p, int c) const {
-    const double q = std::floor(double(p[c]) / step_);
+    const double q = std::floor(double(p[c]) / radius_);
     return q >= -0x1p62 && q <= 0x1p62 ? int64_t(q) : int64_t(0);
   }
   static uint64_t key(int64_t x, int64_t y, int64_t z) {
@@ -198,7 +198,8 @@ class VertexMatcher {
   const BaseMesh& decoded_;
   const std::vector<float>& positions_;
   const std::vector<float>& decoded_positions_;
-  double step_ = 1;
+  double step_ = 1;    // Draco's quantization step; costs are in steps
+  double radius_ = 1;  // how far a decoded position can be from its original: the search radius and the grid's cell
   std::unordered_multimap<uint64_t, uint32_t> grid_;
   // Other attributes, by semantic, to tell apart vertices that share a position (seams).
   std::vector<std::pair<const BaseMeshAttribute*, const BaseMeshAttribute*>> others_;
@@ -211,18 +212,27 @@ VertexMatcher::VertexMatcher(const BaseMesh& original, const BaseMesh& decoded, 
       decoded_(decoded),
       positions_(original.attributes[0].values),
       decoded_positions_(decoded.attributes[0].values) {
-  double extent = 0;
+  double extent = 0, magnitude = 0;
   for (int c = 0; c < 3; ++c) {
     double low = INFINITY, high = -INFINITY;
     for (size_t v = 0; v < original.vertex_count; ++v) {
       low = std::min(low, double(positions_[v * 3 + size_t(c)]));
       high = std::max(high, double(positions_[v * 3 + size_t(c)]));
     }
-    if (original.vertex_count) extent = std::max(extent, high - low);
+    if (original.vertex_count) {
+      extent = std::max(extent, high - low);
+      magnitude = std::max({magnitude, std::fabs(low), std::fabs(high)});
+    }
   }
-  // Draco's positions are within half a step per axis of the originals; a step is the search radius.
-  // A mesh of one point (extent 0) is one cell of any size.
+  // Draco's positions are within half a step per axis of the originals, plus the rounding of its float arithmetic
+  // (it quantizes and dequantizes in floats: a few units in the last place of the largest coordinate). At 21-22 bits
+  // such a unit is a quarter of a step or more for a mesh that lies away from the origin: measured, decoded vertices of
+  // AnimatedMorphSphere, RobotExpressive (22 bits) and CesiumMan (21) lay 1.16, 1.01 and 1.005 steps from their
+  // originals, beyond a radius of one step. The radius is one step or, when larger, the bound on the distance: half
+  // a step and four units in the last place per axis. A mesh of one point (extent 0) is one cell of any size.
   step_ = extent > 0 ? extent / double((1 << settings.position_bits) - 1) : 1.0;
+  const double unit_in_last_place = magnitude * std::numeric_limits<float>::epsilon();
+  radius_ = std::max(step_, std::sqrt(3.0) * (step_ / 2 + 4 * unit_in_last_place));
   grid_.reserve(original.vertex_count);
   for (uint32_t v = 0; v < original.vertex_count; ++v)
     grid_.emplace(key(cell(&positions_[size_t(v) * 3], 0), cell(&positions_[size_t(v) * 3], 1),
@@ -235,12 +245,12 @@ VertexMatcher::VertexMatcher(const BaseMesh& original, const BaseMesh& decoded, 
         others_.push_back({&original.attributes[b], &decoded.attributes[a]});
 }
 
-// How unlike original vertex v decoded vertex p is; infinite beyond a step.
+// How unlike original vertex v decoded vertex p is; infinite beyond the search radius.
 double VertexMatcher::cost(uint32_t p, uint32_t v) const {
   const float* q = &decoded_positions_[size_t(p) * 3];
   double distance = 0;
   for (int c = 0; c < 3; ++c) distance += std::pow(double(q[c]) - positions_[size_t(v) * 3 + size_t(c)], 2);
-  if (distance > step_ * step_) return double(INFINITY);
+  if (distance > radius_ * radius_) return double(INFINITY);
   double total = distance / (step_ * step_);
   for (const auto& [from, to] : others_)
     for (int c = 0; c < from->components; ++c)
@@ -250,7 +260,7 @@ double VertexMatcher::cost(uint32_t p, uint32_t v) const {
   return total;
 }
 
-// The originals within a step of decoded vertex p, in increasing index order.
+// The originals within the search radius of decoded vertex p, in increasing index order.
 std::vector<uint32_t> VertexMatcher::candidates(uint32_t p) const {
   const float* q = &decoded_positions_[size_t(p) * 3];
   std::vector<uint32_t> found;
@@ -263,7 +273,7 @@ std::vector<uint32_t> VertexMatcher::candidates(uint32_t p) const {
       }
   std::sort(found.begin(), found.end());
   found.erase(std::unique(found.begin(), found.end()), found.end());
-  // Thousands of originals can lie within one step (a dense part, a part collapsed to a point): the cheapest few
+  // Thousands of originals can lie within the radius (a dense part, a part collapsed to a point): the cheapest few
   // bound the matching's work (equally cheap ones by index).
   if (found.size() > kMaxCandidates) {
     std::stable_sort(found.begin(), found.end(), [&](uint32_t a, uint32_t b) { return cost(p, a) < cost(p, b); });
