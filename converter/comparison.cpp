@@ -203,6 +203,12 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
       }
       result.vertices += a[0].vertex_count;
       const ErrorMetrics metrics = accumulator.result();
+      PrimitiveComparison compared;
+      compared.node = node.node, compared.mesh = node.mesh, compared.primitive = int(p);
+      compared.other_node = pairs[p].first->node, compared.other_mesh = pairs[p].first->mesh;
+      compared.other_primitive = int(pairs[p].second);
+      compared.metrics = metrics;
+      result.primitives.push_back(compared);
       result.worst.kg_percent = std::max(result.worst.kg_percent, metrics.kg_percent);
       result.worst.rmse_over_diagonal = std::max(result.worst.rmse_over_diagonal, metrics.rmse_over_diagonal);
       result.worst.max_error_over_diagonal =

@@ -14,7 +14,15 @@
 
 namespace segmorph {
 
+// One animated primitive of the reference and the primitive of the other file that plays it.
+struct PrimitiveComparison {
+  int node = -1, mesh = -1, primitive = -1;                    // in the reference
+  int other_node = -1, other_mesh = -1, other_primitive = -1;  // in the other file
+  ErrorMetrics metrics;  // V and F (all clips) are the reference's
+};
+
 struct AnimationComparison {
+  std::vector<PrimitiveComparison> primitives;  // in the order of the reference's sampled nodes and primitives
   ErrorMetrics worst;        // per metric, the largest over the reference's animated primitives
   size_t vertices = 0;       // V of the reference, summed over its animated primitives
   size_t frames = 0;         // F of the reference's first animated primitive, summed over its clips

@@ -120,6 +120,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sa
       if (settings.mode == RateMode::bpvf)
         primitive_settings.target *= double(frames.clips[0].vertex_count) / double(encoding.decoded.vertex_count);
       SEGMORPH_RETURN_IF_ERROR(encode_stream(in_decoded_order(frames.clips, encoding), primitive_settings, what, encoding));
+      encoding.report.mesh = model.nodes[size_t(host)].mesh, encoding.report.primitive = int(p);
       report.primitives.push_back(encoding.report);
       report.draco_bytes += encoding.draco_bytes.size();
       report.animation_bytes += encoding.stream.size();

@@ -4,13 +4,16 @@
 #include "encode.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 
 #include "bake.h"
+#include "comparison.h"
 #include "gltf_io.h"
 #include "kept_skins.h"
 #include "moving_meshes.h"
 #include "rate_target.h"
+#include "segmorph_extension.h"
 #include "tracks.h"
 
 namespace segmorph {
@@ -35,6 +38,9 @@ struct Encoded {
   tinygltf::Model model;
   CompressReport report;
   double kept_skins_floor = 0;  // when kept skins cannot reach the --error target: the KG % they stay at
+  std::vector<PrimitiveMode> modes;  // per sampled node: frames, kept targets or kept skin
+  std::vector<int> rigid_meshes;     // meshes of the encode compressed as rigid meshes
+  double ms_tracks = 0;
 };
 
 // What encode_model_once does with the settings: the codec's and Draco's, whether kept skins stay kept.
@@ -66,13 +72,18 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
   out.model = file.model;
   out.report = CompressReport();
   out.kept_skins_floor = 0;
+  out.modes.assign(file.sampled.size(), PrimitiveMode::frames);
+  out.rigid_meshes.clear();
   std::vector<SampledNode> kept, baked;
   std::vector<int> kept_skins;
   for (size_t i = 0; i < file.sampled.size(); ++i) {
-    if (keeps_skin(*file.sampled[i].node, choices))
+    if (keeps_skin(*file.sampled[i].node, choices)) {
       kept_skins.push_back(file.sampled[i].node->node);
-    else
+      out.modes[i] = PrimitiveMode::kept_skin;
+    } else {
       (keep[i] ? kept : baked).push_back(file.sampled[i]);
+      if (keep[i]) out.modes[i] = PrimitiveMode::kept_targets;
+    }
   }
   const auto say = [&](const std::string& message) { report_progress(progress, message); };
   SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, codec, choices.draco, out.report, say));
@@ -85,12 +96,20 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
   // A rigid part's error counts against the whole it belongs to: a figure's spread is about a quarter of its
   // diagonal.
   const double rigid_spread = scene_diagonal(out.model) / 4;
-  SEGMORPH_RETURN_IF_ERROR(compress_moving_meshes(out.model, moving_meshes(out.model, kept_skins), choices.draco,
-                                                  step_ratio, rigid_spread, meshes));
+  const std::vector<bool> moving = moving_meshes(out.model, kept_skins);
+  for (size_t m = 0; m < moving.size(); ++m) {
+    const bool skin = std::any_of(kept_skins.begin(), kept_skins.end(),
+                                  [&](int node) { return out.model.nodes[size_t(node)].mesh == int(m); });
+    if (moving[m] && !skin) out.rigid_meshes.push_back(int(m));
+  }
+  SEGMORPH_RETURN_IF_ERROR(
+      compress_moving_meshes(out.model, moving, choices.draco, step_ratio, rigid_spread, meshes));
   out.report.draco_bytes += meshes.bytes;
   say(kept_skins.empty() ? "coding the animation tracks" : "coding the animation tracks, measuring the kept skins' error");
   TrackCoding tracks;
+  const auto begin = std::chrono::steady_clock::now();
   SEGMORPH_RETURN_IF_ERROR(code_tracks(file, codec, !kept_skins.empty(), out.model, tracks));
+  out.ms_tracks = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
   out.report.animation_bytes += tracks.bytes;
   out.kept_skins_floor = tracks.kept_skins_floor;
   return Status::Ok();
@@ -152,6 +171,66 @@ double worst_kg(const CompressReport& report) {
   return worst;
 }
 
+// The bytes of a primitive of an encoded model: its Draco mesh's and its animation stream's buffer views.
+size_t coded_bytes(const tinygltf::Model& model, int mesh, int primitive) {
+  size_t bytes = 0;
+  const tinygltf::Primitive& coded = model.meshes[size_t(mesh)].primitives[size_t(primitive)];
+  for (const char* name : {kDracoExtensionName, kExtensionName}) {
+    const auto extension = coded.extensions.find(name);
+    if (extension == coded.extensions.end() || !extension->second.Has("bufferView")) continue;
+    const int view = extension->second.Get("bufferView").GetNumberAsInt();
+    if (view >= 0 && size_t(view) < model.bufferViews.size()) bytes += model.bufferViews[size_t(view)].byteLength;
+  }
+  return bytes;
+}
+
+// The report's primitives and errors, measured as verify measures them: the encode decoded and compared with the
+// input's sampled frames.
+Status measure(const SampledFile& file, const Encoded& encoded, EncodeReport& report) {
+  const auto begin = std::chrono::steady_clock::now();
+  SampledFile decoded;
+  AnimationComparison comparison;
+  Status status = analyze_model(encoded.model, SampleSettings(), false, {}, decoded);
+  if (status.ok())
+    status = compare_animation(file.model, file.scene, file.sampled, decoded.model, decoded.scene, comparison);
+  if (!status.ok()) return Status(StatusCode::internal, "measuring the encode against the input: " + status.message());
+  for (const PrimitiveComparison& compared : comparison.primitives) {
+    EncodedPrimitive primitive;
+    for (size_t i = 0; i < file.sampled.size(); ++i)
+      if (file.sampled[i].node->node == compared.node) primitive.mode = encoded.modes[i];
+    // Decoding may renumber meshes, never nodes: the encoded primitive is that of the node the comparison paired.
+    primitive.output_mesh = encoded.model.nodes[size_t(compared.other_node)].mesh;
+    primitive.output_primitive = compared.other_primitive;
+    for (const StreamReport& stream : encoded.report.primitives)
+      if (stream.mesh == primitive.output_mesh && stream.primitive == primitive.output_primitive)
+        primitive.clusters = stream.clusters;
+    primitive.bytes = coded_bytes(encoded.model, primitive.output_mesh, primitive.output_primitive);
+    primitive.measured = true;
+    primitive.error = primitive_error(file.model, compared);
+    report.primitives.push_back(primitive);
+  }
+  for (int mesh : encoded.rigid_meshes)
+    for (size_t p = 0; p < encoded.model.meshes[size_t(mesh)].primitives.size(); ++p) {
+      EncodedPrimitive primitive;
+      primitive.mode = PrimitiveMode::rigid;
+      primitive.output_mesh = primitive.error.mesh = mesh;
+      primitive.output_primitive = primitive.error.primitive = int(p);
+      primitive.bytes = coded_bytes(encoded.model, mesh, int(p));
+      for (size_t n = 0; n < encoded.model.nodes.size() && primitive.error.node < 0; ++n)
+        if (encoded.model.nodes[n].mesh == mesh) primitive.error.node = int(n);
+      if (primitive.error.node >= 0) primitive.error.node_name = encoded.model.nodes[size_t(primitive.error.node)].name;
+      const auto position = encoded.model.meshes[size_t(mesh)].primitives[p].attributes.find("POSITION");
+      if (position != encoded.model.meshes[size_t(mesh)].primitives[p].attributes.end())
+        primitive.error.vertices = encoded.model.accessors[size_t(position->second)].count;
+      report.primitives.push_back(primitive);
+    }
+  report.kg_percent = comparison.worst.kg_percent;
+  report.rmse_over_diagonal = comparison.worst.rmse_over_diagonal;
+  report.max_error_over_diagonal = comparison.worst.max_error_over_diagonal;
+  report.ms_measure = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, tinygltf::Model& output,
@@ -208,8 +287,12 @@ Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, t
                                     " clusters): it is coded with " + std::to_string(stream.clusters));
       break;
     }
-  output = std::move(encoded.model);
   report = EncodeReport();
+  report_progress(progress, "measuring the encode against the input");
+  SEGMORPH_RETURN_IF_ERROR(measure(file, encoded, report));
+  report.glb_bytes = glb_size(encoded.model);
+  report.ms_tracks = encoded.ms_tracks;
+  output = std::move(encoded.model);
   report.streams = std::move(encoded.report.primitives);
   report.draco_bytes = encoded.report.draco_bytes;
   report.animation_bytes = encoded.report.animation_bytes;

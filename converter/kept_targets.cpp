@@ -115,6 +115,7 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
       encoding = std::move(best);
     }
     encoding.report.kg_percent = targets_kg_percent(reordered, node, encoding);  // of the animation, not the targets
+    encoding.report.mesh = animated.mesh, encoding.report.primitive = int(p);
     report.primitives.push_back(encoding.report);
     report.draco_bytes += encoding.draco_bytes.size();
     report.animation_bytes += encoding.stream.size();

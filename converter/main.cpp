@@ -1,4 +1,5 @@
 // segmorph: the command-line tool, argument parsing and printing over the pipeline API (include/segmorph/segmorph.h).
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -13,17 +14,46 @@
 namespace segmorph {
 namespace {
 
-int usage_error(const std::string& message) {
-  std::fprintf(stderr, "segmorph: %s (see segmorph --help)\n", message.c_str());
+// The stable names of the error codes --json prints ("usage" for a usage error).
+const char* code_name(StatusCode code) {
+  switch (code) {
+    case StatusCode::ok: return "ok";
+    case StatusCode::invalid_argument: return "invalid_argument";
+    case StatusCode::io_error: return "io_error";
+    case StatusCode::bad_data: return "bad_data";
+    case StatusCode::unsupported: return "unsupported";
+    case StatusCode::nothing_to_do: return "nothing_to_do";
+    case StatusCode::numerical: return "numerical";
+    case StatusCode::internal: return "internal";
+    case StatusCode::out_of_memory: return "out_of_memory";
+  }
+  return "internal";
+}
+
+std::string json_string(const std::string& s);
+
+// An error: one line on stderr and, with --json, one object on stdout.
+void print_error(bool json, const char* code, const std::string& file, const std::string& message) {
+  if (file.empty())
+    std::fprintf(stderr, "segmorph: %s (see segmorph --help)\n", message.c_str());
+  else
+    std::fprintf(stderr, "segmorph: error: %s: %s\n", file.c_str(), message.c_str());
+  if (json)
+    std::printf("{\"error\":{\"code\":\"%s\",\"file\":%s,\"message\":%s}}\n", code,
+                file.empty() ? "null" : json_string(file).c_str(), json_string(message).c_str());
+}
+
+int usage_error(bool json, const std::string& message) {
+  print_error(json, "usage", "", message);
   return 2;
 }
 
-int fail(const std::string& file, const Status& status) {
+int fail(const CommandLine& options, const std::string& file, const Status& status) {
   // Messages may quote bytes of a corrupt file: control characters would break the one-line promise.
   std::string message = status.message();
   for (char& c : message)
     if ((unsigned char)c < 0x20 || c == 0x7f) c = '?';
-  std::fprintf(stderr, "segmorph: error: %s: %s\n", file.c_str(), message.c_str());
+  print_error(options.json, code_name(status.code()), file, message);
   return 1;
 }
 
@@ -59,7 +89,7 @@ Status load(const std::string& path, const CommandLine& options, Model& model) {
 int refuse_replacing_input(const CommandLine& options, const Model& input) {
   for (const std::string* output : {&options.output, &options.frames})
     if (!output->empty() && writes_over(*output, options.inputs[0], input))
-      return usage_error(*output + " would replace the input " + options.inputs[0] +
+      return usage_error(options.json, *output + " would replace the input " + options.inputs[0] +
                          " or a file it reads; give --force to replace it");
   return 0;
 }
@@ -68,13 +98,68 @@ Progress progress_of(const CommandLine& options) {
   return [&options](const std::string& message) { progress(options, message); };
 }
 
+std::string primitive_label(const PrimitiveError& primitive) {
+  return (primitive.node_name.empty() ? "node " + std::to_string(primitive.node) : primitive.node_name) + ", mesh " +
+         std::to_string(primitive.mesh) + " primitive " + std::to_string(primitive.primitive);
+}
+
+std::string primitive_error_json(const PrimitiveError& primitive) {
+  char figures[256];
+  std::snprintf(figures, sizeof(figures),
+                ",\"mesh\":%d,\"primitive\":%d,\"vertices\":%zu,\"frames\":%zu,\"kg_percent\":%.6g,"
+                "\"rmse_over_diag\":%.6g,\"max_error_over_diag\":%.6g",
+                primitive.mesh, primitive.primitive, primitive.vertices, primitive.frames, primitive.kg_percent,
+                primitive.rmse_over_diagonal, primitive.max_error_over_diagonal);
+  return "{\"node\":" + std::to_string(primitive.node) + ",\"node_name\":" + json_string(primitive.node_name) + figures;
+}
+
+// encode's primitives as a JSON array: the input's animated primitives, then the rigid meshes (no error figures).
+std::string encoded_primitives_json(const EncodeReport& report) {
+  std::string json = "[";
+  for (const EncodedPrimitive& primitive : report.primitives) {
+    if (json.size() > 1) json += ",";
+    if (primitive.measured) {
+      json += primitive_error_json(primitive.error);
+    } else {
+      json += "{\"node\":" + std::to_string(primitive.error.node) +
+              ",\"node_name\":" + json_string(primitive.error.node_name) +
+              ",\"mesh\":" + std::to_string(primitive.error.mesh) +
+              ",\"primitive\":" + std::to_string(primitive.error.primitive) +
+              ",\"vertices\":" + std::to_string(primitive.error.vertices);
+    }
+    json += std::string(",\"mode\":\"") + mode_name(primitive.mode) + "\",\"output_mesh\":" +
+            std::to_string(primitive.output_mesh) + ",\"output_primitive\":" +
+            std::to_string(primitive.output_primitive) + ",\"clusters\":" + std::to_string(primitive.clusters) +
+            ",\"bytes\":" + std::to_string(primitive.bytes) + "}";
+  }
+  return json + "]";
+}
+
+// encode's primitives, one indented line each.
+std::string encoded_primitives_text(const EncodeReport& report) {
+  std::string text;
+  for (const EncodedPrimitive& primitive : report.primitives) {
+    char line[512];
+    const PrimitiveError& e = primitive.error;
+    if (primitive.measured)
+      std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu frames, %zu clusters, %zu bytes, KG %.4f %%\n",
+                    primitive_label(e).c_str(), mode_name(primitive.mode), e.vertices, e.frames, primitive.clusters,
+                    primitive.bytes, e.kg_percent);
+    else
+      std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu bytes\n", primitive_label(e).c_str(),
+                    mode_name(primitive.mode), e.vertices, primitive.bytes);
+    text += line;
+  }
+  return text;
+}
+
 int run_info(const CommandLine& options) {
   const std::string& path = options.inputs[0];
   Model model;
   InfoReport report;
   Status status = load(path, options, model);
   if (status.ok()) status = info(model, options.sampling, report, progress_of(options));
-  if (!status.ok()) return fail(path, status);
+  if (!status.ok()) return fail(options, path, status);
 
   std::string json = "{\"file\":" + json_string(path) + ",\"primitives\":[";
   std::string text;
@@ -125,10 +210,10 @@ int run_bake(const CommandLine& options) {
   if (status.ok() && !options.force)
     if (const int refused = refuse_replacing_input(options, model)) return refused;
   if (status.ok()) status = bake(model, options.sampling, &report, progress_of(options));
-  if (!status.ok()) return fail(path, status);
+  if (!status.ok()) return fail(options, path, status);
   progress(options, "writing " + options.output);
   status = model.save(options.output);
-  if (!status.ok()) return fail(options.output, status);
+  if (!status.ok()) return fail(options, options.output, status);
   progress(options, "baked " + std::to_string(report.nodes) + " animated node" + (report.nodes == 1 ? "" : "s") + ", " +
                         std::to_string(report.frames) + " frames in all");
   return 0;
@@ -142,10 +227,10 @@ int run_encode(const CommandLine& options) {
   if (status.ok() && !options.force)
     if (const int refused = refuse_replacing_input(options, input)) return refused;
   if (status.ok()) status = encode(input, options.encode, output, &report, progress_of(options));
-  if (!status.ok()) return fail(path, status);
+  if (!status.ok()) return fail(options, path, status);
   progress(options, "writing " + options.output);
   status = output.save(options.output);
-  if (!status.ok()) return fail(options.output, status);
+  if (!status.ok()) return fail(options, options.output, status);
 
   Model written;
   const size_t bytes = Model::load(options.output, written).ok() ? file_bytes(options.output, written) : 0;
@@ -161,21 +246,24 @@ int run_encode(const CommandLine& options) {
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
   if (options.json) {
     std::printf(
-        "{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"primitives\":%zu,\"clusters\":%.0f,"
-        "\"e_pi_morse\":%.6g,\"e_pi\":%.6g,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,"
-        "\"draco_bytes\":%zu,\"animation_bytes\":%zu,\"milliseconds\":{\"segmentation\":%.1f,\"motion\":%.1f,"
-        "\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"draco\":%.1f}}\n",
-        json_string(path).c_str(), json_string(options.output).c_str(), bytes, report.streams.size(), clusters,
-        e_pi_morse, e_pi, bpvf, vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0,
-        report.draco_bytes, report.animation_bytes, ms[0], ms[1], ms[2], ms[3], ms[4], report.ms_draco);
+        "{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,"
+        "\"rmse_over_diag\":%.6g,\"max_error_over_diag\":%.6g,\"draco_bytes\":%zu,\"animation_bytes\":%zu,"
+        "\"streams\":%zu,\"clusters\":%.0f,\"e_pi_morse\":%.6g,\"e_pi\":%.6g,\"milliseconds\":{\"segmentation\":%.1f,"
+        "\"motion\":%.1f,\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"draco\":%.1f,\"tracks\":%.1f,"
+        "\"measure\":%.1f},\"primitives\":%s}\n",
+        json_string(path).c_str(), json_string(options.output).c_str(), bytes, bpvf,
+        vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0, report.kg_percent,
+        report.rmse_over_diagonal, report.max_error_over_diagonal, report.draco_bytes, report.animation_bytes,
+        report.streams.size(), clusters, e_pi_morse, e_pi, ms[0], ms[1], ms[2], ms[3], ms[4], report.ms_draco,
+        report.ms_tracks, report.ms_measure, encoded_primitives_json(report).c_str());
   } else {
-    std::printf("%s: %zu bytes, %.3f bits per vertex per frame (animation streams %zu bytes, Draco meshes %zu bytes)",
-                options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes);
-    if (report.streams.empty())
-      std::printf("\n");
-    else
-      std::printf(", %zu primitive%s coded as frames, %.0f clusters, E(Pi) %.6f (Morse segmentation %.6f)\n",
-                  report.streams.size(), report.streams.size() == 1 ? "" : "s", clusters, e_pi, e_pi_morse);
+    std::printf("%s: %zu bytes, %.3f bits per vertex per frame (animation streams %zu bytes, Draco meshes %zu bytes), "
+                "KG %.4f %% measured on the decoded file",
+                options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes, report.kg_percent);
+    if (!report.streams.empty())
+      std::printf(", %zu stream%s, %.0f clusters, E(Pi) %.6f (Morse segmentation %.6f)", report.streams.size(),
+                  report.streams.size() == 1 ? "" : "s", clusters, e_pi, e_pi_morse);
+    std::printf("\n%s", encoded_primitives_text(report).c_str());
   }
   return 0;
 }
@@ -189,19 +277,19 @@ int run_decode(const CommandLine& options) {
   if (status.ok() && !options.force)
     if (const int refused = refuse_replacing_input(options, model)) return refused;
   if (status.ok()) status = decode(model, &report, options.frames.empty() ? nullptr : &decoded);
-  if (!status.ok()) return fail(path, status);
+  if (!status.ok()) return fail(options, path, status);
   if (report.primitives == 0 && report.coded_animations == 0)
-    return fail(path, Status(StatusCode::nothing_to_do,
+    return fail(options, path, Status(StatusCode::nothing_to_do,
                              "not encoded: it has no SEGMORPH_animation_compression primitive or animation"));
   if (!options.output.empty()) {
     progress(options, "writing " + options.output);
     status = model.save(options.output);
-    if (!status.ok()) return fail(options.output, status);
+    if (!status.ok()) return fail(options, options.output, status);
   }
   if (!options.frames.empty()) {
     progress(options, "writing the decoded frames to " + options.frames);
     status = save_decoded_frames(decoded, options.frames);
-    if (!status.ok()) return fail(options.frames, status);
+    if (!status.ok()) return fail(options, options.frames, status);
   }
   progress(options, "decoded " + std::to_string(report.primitives) + " primitive" + (report.primitives == 1 ? "" : "s") +
                         " and the tracks of " + std::to_string(report.coded_animations) + " animation" +
@@ -213,37 +301,52 @@ int run_verify(const CommandLine& options) {
   const std::string &original_path = options.inputs[0], &compressed_path = options.inputs[1];
   Model original, compressed;
   Status status = load(original_path, options, original);
-  if (!status.ok()) return fail(original_path, status);
+  if (!status.ok()) return fail(options, original_path, status);
   status = load(compressed_path, options, compressed);
-  if (!status.ok()) return fail(compressed_path, status);
+  if (!status.ok()) return fail(options, compressed_path, status);
   VerifyReport report;
   status = verify(original, compressed, options.sampling, report, progress_of(options));
   if (!status.ok()) {
     // Which file is at fault: the original when it cannot be sampled alone.
     InfoReport alone;
     const Status original_status = info(original, options.sampling, alone);
-    return original_status.ok() ? fail(compressed_path, status) : fail(original_path, original_status);
+    return original_status.ok() ? fail(options, compressed_path, status) : fail(options, original_path, original_status);
   }
   const size_t bytes = file_bytes(compressed_path, compressed);
   const double vertex_frames = report.vertex_frames;
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
   const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0;
+  std::string primitives;
+  for (const PrimitiveError& primitive : report.primitives)
+    primitives += (primitives.empty() ? "" : ",") + primitive_error_json(primitive) + "}";
   if (options.json) {
     std::printf(
         "{\"original\":%s,\"compressed\":%s,\"vertices\":%zu,\"frames\":%zu,\"vertex_frames\":%.0f,"
         "\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,\"rmse_over_diag\":%.6g,"
-        "\"max_error_over_diag\":%.6g}\n",
+        "\"max_error_over_diag\":%.6g,\"primitives\":[%s]}\n",
         json_string(original_path).c_str(), json_string(compressed_path).c_str(), report.vertices, report.frames,
         vertex_frames, bytes, bpvf, bpvf_animation, report.kg_percent, report.rmse_over_diagonal,
-        report.max_error_over_diagonal);
+        report.max_error_over_diagonal, primitives.c_str());
   } else {
     std::printf(
         "%s against %s: %zu vertices, %zu frames, %zu bytes, %.3f bpvf (animation %.3f), KG %.4f %%, "
         "RMSE %.3g and max error %.3g of the diagonal\n",
         compressed_path.c_str(), original_path.c_str(), report.vertices, report.frames, bytes, bpvf, bpvf_animation,
         report.kg_percent, report.rmse_over_diagonal, report.max_error_over_diagonal);
+    if (report.primitives.size() > 1)
+      for (const PrimitiveError& primitive : report.primitives)
+        std::printf("  %s: %zu vertices, KG %.4f %%, RMSE %.3g and max error %.3g of the diagonal\n",
+                    primitive_label(primitive).c_str(), primitive.vertices, primitive.kg_percent,
+                    primitive.rmse_over_diagonal, primitive.max_error_over_diagonal);
   }
   return 0;
+}
+
+// Whether the command line asks for --json (for a usage error found before it was read).
+bool wants_json(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--json") == 0) return true;
+  return false;
 }
 
 int run(int argc, char** argv) {
@@ -259,7 +362,7 @@ int run(int argc, char** argv) {
                   SEGMORPH_STREAM_VERSION_MAX, SEGMORPH_TRACK_STREAM_VERSION);
       return 0;
     case ParseResult::usage_error:
-      if (!error.empty()) return usage_error(error);
+      if (!error.empty()) return usage_error(options.json || wants_json(argc, argv), error);
       std::fputs(usage().c_str(), stderr);
       return 2;
     case ParseResult::run:

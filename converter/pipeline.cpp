@@ -96,6 +96,27 @@ Status analyze_model(const tinygltf::Model& model, const SampleSettings& setting
   return Status::Ok();
 }
 
+PrimitiveError primitive_error(const tinygltf::Model& model, const PrimitiveComparison& compared) {
+  PrimitiveError error;
+  error.node = compared.node, error.node_name = model.nodes[size_t(compared.node)].name;
+  error.mesh = compared.mesh, error.primitive = compared.primitive;
+  error.vertices = compared.metrics.vertices, error.frames = compared.metrics.frames;
+  error.kg_percent = compared.metrics.kg_percent;
+  error.rmse_over_diagonal = compared.metrics.rmse_over_diagonal;
+  error.max_error_over_diagonal = compared.metrics.max_error_over_diagonal;
+  return error;
+}
+
+const char* mode_name(PrimitiveMode mode) {
+  switch (mode) {
+    case PrimitiveMode::frames: return "frames";
+    case PrimitiveMode::kept_targets: return "kept_targets";
+    case PrimitiveMode::kept_skin: return "kept_skin";
+    case PrimitiveMode::rigid: return "rigid";
+  }
+  return "frames";
+}
+
 Status info(const Model& model, const SampleSettings& settings, InfoReport& report, const Progress& progress) {
   SampledFile file;
   SEGMORPH_RETURN_IF_ERROR(analyze_model(model.data().gltf, settings, true, progress, file));
@@ -195,6 +216,8 @@ Status verify(const Model& original, const Model& compressed, const SampleSettin
   report.rmse_over_diagonal = comparison.worst.rmse_over_diagonal;
   report.max_error_over_diagonal = comparison.worst.max_error_over_diagonal;
   report.animation_bytes = other.decoded.animation_bytes;
+  for (const PrimitiveComparison& compared : comparison.primitives)
+    report.primitives.push_back(primitive_error(reference.model, compared));
   return Status::Ok();
 }
 

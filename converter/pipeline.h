@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "comparison.h"
 #include "compressed.h"
 #include "sample.h"
 #include "segmorph/segmorph.h"
@@ -31,6 +32,9 @@ struct SampledFile {
 // `file` from a copy of `model`: decoded, its animated nodes found, and, when `sample` is true, sampled.
 Status analyze_model(const tinygltf::Model& model, const SampleSettings& settings, bool sample,
                      const Progress& progress, SampledFile& file);
+
+// A primitive's errors as the API reports them, from a comparison of the file `model` with another.
+PrimitiveError primitive_error(const tinygltf::Model& model, const PrimitiveComparison& compared);
 
 // Calls `progress` when there is one.
 inline void report_progress(const Progress& progress, const std::string& message) {

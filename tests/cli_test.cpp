@@ -487,7 +487,7 @@ TEST(Cli, AutomaticClusterCountIsNearTheBestFixedOne) {
     const Result result =
         run("encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/fox.glb --skins bake --json " + options);
     EXPECT_EQ(result.exit_code, 0) << result.err;
-    EXPECT_EQ(json_number(result.out, "primitives"), 1) << "the codec did not run";
+    EXPECT_EQ(json_number(result.out, "streams"), 1) << "the codec did not run";
     return json_number(result.out, "animation_bytes");
   };
   double best = INFINITY;
@@ -883,7 +883,7 @@ TEST(Cli, SkinsAreKeptAndTracksCoded) {
                     decoded = directory + "/decoded.gltf";
   Result result = run("encode -q " + input + " -o " + kept + " --json");
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  EXPECT_EQ(json_number(result.out, "primitives"), 0);  // no frame stream
+  EXPECT_EQ(json_number(result.out, "streams"), 0);  // no frame stream
   const std::string json = read_text(kept);
   EXPECT_NE(json.find("\"JOINTS_0\""), std::string::npos);
   EXPECT_NE(json.find("\"skins\""), std::string::npos);
@@ -921,10 +921,10 @@ TEST(Cli, SkinsOption) {
   Result result = run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory +
                       "/baked.glb --skins bake --json");
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  EXPECT_EQ(json_number(result.out, "primitives"), 1);
+  EXPECT_EQ(json_number(result.out, "streams"), 1);
   result = run("encode -q " + sample("RiggedSimple/RiggedSimple.glb") + " -o " + directory + "/lossless.glb --lossless --json");
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  EXPECT_EQ(json_number(result.out, "primitives"), 1);
+  EXPECT_EQ(json_number(result.out, "streams"), 1);
 }
 
 // A kept skin's weights are bytes, which sets a floor under its error: below it, encode bakes the skin instead of
@@ -973,4 +973,96 @@ TEST(Cli, DamagedTrackStreamsAreRefused) {
   for (size_t i = 4; i < stream.byteLength; i += 3) bin[stream.byteOffset + i] = char(bin[stream.byteOffset + i] ^ 0x5a);
   write_text(directory + "/fox.bin", bin);
   expect_clean_failure(encoded, "animation", "decode");
+}
+
+namespace {
+
+// The value of `key` in the object of encode --json's "primitives" array at `index` (NaN when absent).
+std::string json_primitive(const std::string& json, size_t index) {
+  size_t at = json.find("\"primitives\":[");
+  for (size_t i = 0; at != std::string::npos && i <= index; ++i) at = json.find("{\"node\":", at + 1);
+  if (at == std::string::npos) return "";
+  return json.substr(at, json.find('}', at) - at + 1);
+}
+
+}  // namespace
+
+// encode --json reports each primitive: how it was stored, its bytes and the error measured on the decoded result,
+// the same figures verify gives; the whole file's KG is the worst primitive's. Before: "primitives":0 for a kept
+// skin, no KG, "coded as frames" whatever the mode.
+TEST(Cli, EncodeReportsEveryPrimitiveAsVerifyMeasuresIt) {
+  const std::string directory = output_directory("encode_report");
+  const struct {
+    std::string input, options, mode;
+    int streams;
+  } cases[] = {{"Fox/Fox.glb", "", "kept_skin", 0},
+               {"SimpleMorph/SimpleMorph.gltf", "--targets keep", "kept_targets", 1},
+               {"RiggedSimple/RiggedSimple.glb", "--skins bake", "frames", 1}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.input + " " + c.options);
+    const std::string output = directory + "/out.glb";
+    const Result encoded = run("encode -q " + sample(c.input) + " -o " + output + " --json " + c.options);
+    ASSERT_EQ(encoded.exit_code, 0) << encoded.err;
+    const std::string primitive = json_primitive(encoded.out, 0);
+    EXPECT_NE(primitive.find("\"mode\":\"" + c.mode + "\""), std::string::npos) << encoded.out;
+    EXPECT_TRUE(json_primitive(encoded.out, 1).empty()) << "one animated primitive";
+    EXPECT_EQ(json_number(encoded.out, "streams"), c.streams);
+    EXPECT_EQ(json_number(encoded.out, "bytes"), double(fs::file_size(output)));
+    EXPECT_GT(json_number(primitive, "bytes"), 0);
+    EXPECT_GT(json_number(primitive, "vertices"), 0);
+    EXPECT_GT(json_number(primitive, "frames"), 0);
+    const double kg = json_number(encoded.out, "kg_percent");
+    EXPECT_GT(kg, 0);
+    EXPECT_LE(kg, 0.15);
+    EXPECT_EQ(json_number(primitive, "kg_percent"), kg);
+    const Result verified = run("verify -q " + sample(c.input) + " " + output + " --json");
+    ASSERT_EQ(verified.exit_code, 0) << verified.err;
+    EXPECT_NEAR(json_number(verified.out, "kg_percent"), kg, 1e-5 * kg);
+    const Result text = run("encode -q " + sample(c.input) + " -o " + output + " " + c.options);
+    EXPECT_NE(text.out.find(": " + c.mode + ", "), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("measured on the decoded file"), std::string::npos) << text.out;
+  }
+}
+
+// With --json, an error is also one JSON object on stdout with a stable code; without it, stdout stays empty.
+TEST(Cli, JsonErrorsAreOneObjectOnStdout) {
+  const std::string directory = output_directory("json_errors");
+  Result result = run("encode " + directory + "/missing.glb -o " + directory + "/x.glb --json");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(result.out, "{\"error\":{\"code\":\"io_error\",\"file\":\"" + directory +
+                            "/missing.glb\",\"message\":\"cannot open: No such file or directory\"}}\n");
+  EXPECT_NE(result.err.find("segmorph: error: " + directory + "/missing.glb: cannot open"), std::string::npos);
+  result = run("encode " + directory + "/missing.glb -o " + directory + "/x.glb");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(result.out, "");
+  result = run("encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/x.glb --error 1000 --json");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(result.out.rfind("{\"error\":{\"code\":\"usage\",\"file\":null,\"message\":\"--error takes", 0), 0u)
+      << result.out;
+  write_text(directory + "/bad.glb", "glTF\x02");
+  result = run("verify -q " + sample("Fox/Fox.glb") + " " + directory + "/bad.glb --json");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(result.out.rfind("{\"error\":{\"code\":\"bad_data\",\"file\":\"" + directory + "/bad.glb\"", 0), 0u)
+      << result.out;
+  result = run("info -q " + sample("SimpleSkin/SimpleSkin.gltf") + " " + sample("Fox/Fox.glb") + " --json");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(result.out.rfind("{\"error\":{\"code\":\"usage\"", 0), 0u) << result.out;
+}
+
+// verify reports every animated primitive as well as the worst; the worst is the largest of theirs.
+TEST(Cli, VerifyReportsEveryPrimitive) {
+  if (!segmorph::testing::have_shared_samples()) GTEST_SKIP() << "../shared/samples is absent";
+  const std::string directory = output_directory("verify_primitives");
+  const std::string input = std::string(SEGMORPH_SHARED_SAMPLES_DIR) + "/gltf/RobotExpressive/RobotExpressive.glb";
+  ASSERT_EQ(run("encode -q " + input + " -o " + directory + "/robot.glb").exit_code, 0);
+  const Result result = run("verify -q " + input + " " + directory + "/robot.glb --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  double worst = 0;
+  size_t count = 0;
+  for (std::string primitive; !(primitive = json_primitive(result.out, count)).empty(); ++count)
+    worst = std::max(worst, json_number(primitive, "kg_percent"));
+  EXPECT_EQ(count, 7u) << "three morph heads and four skinned hands";
+  EXPECT_EQ(worst, json_number(result.out, "kg_percent"));
+  const Result text = run("verify -q " + input + " " + directory + "/robot.glb");
+  EXPECT_NE(text.out.find("  Head_3, mesh 4 primitive 0: 876 vertices, KG "), std::string::npos) << text.out;
 }

@@ -136,6 +136,7 @@ struct EncodeSettings {
 
 // One animation stream of a primitive coded as frames or kept targets, as the codec made it.
 struct StreamReport {
+  int mesh = -1, primitive = -1;  // the primitive of the encoded file it animates
   size_t clusters = 0;      // K
   double e_pi_morse = 0;    // E(Π) of the Morse segmentation before merging to K and refinement (paper, Table 2)
   double e_pi = 0;          // E(Π) of the final clusters
@@ -148,12 +149,51 @@ struct StreamReport {
   double ms_segmentation = 0, ms_motion = 0, ms_prediction = 0, ms_rate_control = 0, ms_entropy = 0;
 };
 
+// One animated primitive of an original file, measured against the primitive of another file that plays it (verify),
+// or against its own decoded encode (encode): the errors verify reports, for this primitive alone.
+struct PrimitiveError {
+  int node = -1;  // in the original
+  std::string node_name;
+  int mesh = -1, primitive = -1;
+  size_t vertices = 0, frames = 0;  // the original's V and F (all clips)
+  double kg_percent = 0, rmse_over_diagonal = 0, max_error_over_diagonal = 0;
+};
+
+// How encode stored a primitive: its animation as frames (a stream of its sampled frames: morph-target meshes baked
+// and skinned meshes baked), as kept targets (a stream of its morph targets, played by its weights), as a kept skin
+// (its mesh in Draco, played by its joints' coded tracks), or as a rigid mesh (in Draco, moved by its node's tracks).
+enum class PrimitiveMode { frames, kept_targets, kept_skin, rigid };
+
+// "frames", "kept_targets", "kept_skin" or "rigid".
+const char* mode_name(PrimitiveMode mode);
+
+// One primitive of the encoded file.
+struct EncodedPrimitive {
+  PrimitiveMode mode = PrimitiveMode::frames;
+  int output_mesh = -1, output_primitive = -1;  // where it is in the encoded file
+  size_t clusters = 0;                          // K of its stream (frames and kept targets)
+  size_t bytes = 0;                             // its animation stream and its Draco mesh
+  // The animated primitive of the input it plays, measured on the decoded encode as verify measures it. A rigid
+  // mesh is not measured (measured false; error.mesh and primitive are its output_mesh and output_primitive): its
+  // error is Draco's quantization, within half a step per axis.
+  bool measured = false;
+  PrimitiveError error;
+};
+
 struct EncodeReport {
+  // Every animated primitive of the input (in the order of its animated nodes and their primitives), then the rigid
+  // meshes' primitives.
+  std::vector<EncodedPrimitive> primitives;
+  size_t glb_bytes = 0;  // the encoded model as a .glb
+  // The worst primitive's errors, measured on the decoded encode against the input (what verify reports).
+  double kg_percent = 0, rmse_over_diagonal = 0, max_error_over_diagonal = 0;
   std::vector<StreamReport> streams;  // one per primitive coded as frames or kept targets
   double vertex_frames = 0;           // Σ V × F over the input's animated primitives and clips (what bpvf counts)
   size_t draco_bytes = 0;             // base meshes, kept skins and moving meshes
   size_t animation_bytes = 0;         // animation and track streams
   double ms_draco = 0;
+  double ms_tracks = 0;   // coding the tracks (with kept skins: the search for their precision)
+  double ms_measure = 0;  // decoding the encode and measuring it against the input
   double kept_skins_floor = 0;  // > 0: kept skins stayed at this KG % above the target, and were baked instead
 };
 
@@ -206,6 +246,7 @@ struct VerifyReport {
   // The worst animated primitive's errors: KG in percent; RMSE and largest error over the bounding-box diagonal.
   double kg_percent = 0, rmse_over_diagonal = 0, max_error_over_diagonal = 0;
   size_t animation_bytes = 0;  // the compressed file's SEGMORPH streams
+  std::vector<PrimitiveError> primitives;  // every animated primitive of the original
 };
 
 // Compares the animation of `compressed` with that of `original` (either may be encoded, baked, original or written
