@@ -37,15 +37,18 @@ const char* const kCommands =
     "      primitive (meshes in order, then their primitives), clip by clip, frame by frame, vertex by\n"
     "      vertex, x y z; the frames are positions, except for kept morph targets: one clip of their\n"
     "      POSITION displacements (docs/runtime.md).\n"
-    "  verify ORIGINAL COMPRESSED [--json] [--fps N]\n"
+    "  verify ORIGINAL COMPRESSED [--max-error E] [--max-bpvf R] [--json] [--fps N]\n"
     "      Compare the animation of two files (either may be encoded, baked, original or written by another\n"
     "      tool: primitives and vertices are paired by trajectory, COMPRESSED is sampled at ORIGINAL's frame\n"
     "      times): bytes, bits per vertex per frame, KG error, RMSE and maximum error over the bounding-box\n"
-    "      diagonal.\n"
+    "      diagonal, for the worst primitive and for each. With --max-error or --max-bpvf, a gate: exit\n"
+    "      status 1 when COMPRESSED is above a bound.\n"
     "\n"
     "Options (an option's value may also follow '=': --error=0.5):\n";
 
-const char* const kExitStatus = "\nExit status: 0 on success, 1 when the input cannot be processed, 2 on a usage error.\n";
+const char* const kExitStatus =
+    "\nExit status: 0 on success, 1 when the input cannot be processed (or verify finds it above --max-error\n"
+    "or --max-bpvf), 2 on a usage error.\n";
 
 // The value an option takes.
 enum class Kind {
@@ -138,6 +141,12 @@ const Option kOptions[] = {
                              : text == "keep" ? EncodeSettings::Targets::keep
                                               : EncodeSettings::Targets::bake;
      }},
+    {"--max-error", nullptr, "E", kVerify, Kind::number, 0, 10000, false, nullptr, 0,
+     "fail (exit status 1) when the worst primitive's KG error in percent is above E, {range}",
+     [](CommandLine& line, const std::string&, double number) { line.max_error = number; }},
+    {"--max-bpvf", nullptr, "R", kVerify, Kind::number, 0, 1000, false, nullptr, 0,
+     "fail (exit status 1) when COMPRESSED takes more than R bits per vertex per frame, {range}",
+     [](CommandLine& line, const std::string&, double number) { line.max_bpvf = number; }},
     {"--json", nullptr, nullptr, kInfo | kEncode | kVerify, Kind::flag, 0, 0, false, nullptr, 0,
      "print one JSON object instead of text",
      [](CommandLine& line, const std::string&, double) { line.json = true; }},

@@ -20,6 +20,7 @@ struct CommandLine {
   bool json = false;
   bool quiet = false;
   bool force = false;  // an output may replace the input
+  double max_error = -1, max_bpvf = -1;  // verify's bounds; negative: none
   bool help = false, version = false;
 };
 

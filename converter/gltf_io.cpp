@@ -62,8 +62,6 @@ bool write_no_image(const std::string*, const std::string*, const tinygltf::Imag
 }
 
 // Extensions that store geometry in a form this reader does not decode.
-const char* const kUnreadableExtensions[] = {"EXT_meshopt_compression", "KHR_meshopt_compression"};
-
 std::string mime_of_uri(const std::string& uri) {
   if (uri.rfind("data:", 0) == 0) {
     const size_t end = uri.find_first_of(";,");
@@ -194,6 +192,7 @@ Status prepare_for_tinygltf(bool binary, std::string& bytes) {
   bool changed = false;
   if (!binary) {
     SEGMORPH_RETURN_IF_ERROR(check_json_nesting(bytes));
+    SEGMORPH_RETURN_IF_ERROR(refuse_unreadable_extensions(bytes));
     return drop_draco_indices(bytes, changed);
   }
   // GLB: a 12-byte header, then the JSON chunk (length, type, data), then the rest, kept as it is.
@@ -208,6 +207,7 @@ Status prepare_for_tinygltf(bool binary, std::string& bytes) {
   const uint64_t json_length = read_u32(data + 12);
   std::string json = bytes.substr(20, size_t(json_length));
   SEGMORPH_RETURN_IF_ERROR(check_json_nesting(json));
+  SEGMORPH_RETURN_IF_ERROR(refuse_unreadable_extensions(json));
   SEGMORPH_RETURN_IF_ERROR(drop_draco_indices(json, changed));
   if (!changed) return Status::Ok();
   while (json.size() % 4) json += ' ';
@@ -310,11 +310,6 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
   if (!loaded) return Status(StatusCode::bad_data, "cannot parse glTF: " + one_line(error.empty() ? warning : error));
   if (warnings && !warning.empty()) warnings->push_back(one_line(warning));
 
-  for (const char* name : kUnreadableExtensions) {
-    if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), name) != model.extensionsUsed.end())
-      return Status(StatusCode::unsupported,
-                    std::string("uses ") + name + ", which segmorph does not decode; decompress the file first");
-  }
   // tinygltf leaves bufferViews unchecked against their buffers. Reads check the views they use, but repack
   // copies every view an accessor names, read or not: all are checked here, once.
   for (size_t view = 0; view < model.bufferViews.size(); ++view) {

@@ -195,4 +195,21 @@ Status drop_draco_indices(std::string& json, bool& changed) {
   return Status::Ok();
 }
 
+Status refuse_unreadable_extensions(const std::string& json) {
+  static const char* const kUnreadable[] = {"EXT_meshopt_compression", "KHR_meshopt_compression"};
+  if (json.find("meshopt_compression") == std::string::npos) return Status::Ok();
+  Json document;
+  if (!Parser(json).parse(document) || document.kind != Json::Kind::object)
+    return Status(StatusCode::bad_data, "cannot parse glTF: the JSON is malformed");
+  const Json* used = document.member("\"extensionsUsed\"");
+  if (!used || used->kind != Json::Kind::array) return Status::Ok();
+  for (const Json& item : used->items)
+    for (const char* name : kUnreadable)
+      if (item.text == "\"" + std::string(name) + "\"")
+        return Status(StatusCode::unsupported, std::string("uses ") + name +
+                                                   ", which segmorph does not read: undo it first, for example with "
+                                                   "glTF-Transform's 'gltf-transform copy IN OUT.glb'");
+  return Status::Ok();
+}
+
 }  // namespace segmorph

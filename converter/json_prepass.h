@@ -20,4 +20,9 @@ Status drop_draco_indices(std::string& json, bool& changed);
 // recursively and overflows the stack on a file of some ten thousand '[' (a 60 KB file crashed it).
 Status check_json_nesting(const std::string& json, int max_depth = 512);
 
+// Fails (unsupported) when the document uses an extension whose data segmorph cannot read, naming it and how to
+// undo it: EXT_meshopt_compression and KHR_meshopt_compression (tinygltf would otherwise refuse such a file with a
+// message about buffer lengths).
+Status refuse_unreadable_extensions(const std::string& json);
+
 }  // namespace segmorph

@@ -316,6 +316,20 @@ int run_verify(const CommandLine& options) {
   const double vertex_frames = report.vertex_frames;
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
   const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0;
+  // The gate: the first bound exceeded, in one line.
+  std::string above;
+  char line[512];
+  const PrimitiveError* worst = nullptr;
+  for (const PrimitiveError& primitive : report.primitives)
+    if (!worst || primitive.kg_percent > worst->kg_percent) worst = &primitive;
+  if (options.max_error >= 0 && report.kg_percent > options.max_error) {
+    std::snprintf(line, sizeof(line), "KG %.4f %% is above --max-error %g (%s)", report.kg_percent, options.max_error,
+                  worst ? primitive_label(*worst).c_str() : "");
+    above = line;
+  } else if (options.max_bpvf >= 0 && bpvf > options.max_bpvf) {
+    std::snprintf(line, sizeof(line), "%.3f bits per vertex per frame is above --max-bpvf %g", bpvf, options.max_bpvf);
+    above = line;
+  }
   std::string primitives;
   for (const PrimitiveError& primitive : report.primitives)
     primitives += (primitives.empty() ? "" : ",") + primitive_error_json(primitive) + "}";
@@ -323,10 +337,14 @@ int run_verify(const CommandLine& options) {
     std::printf(
         "{\"original\":%s,\"compressed\":%s,\"vertices\":%zu,\"frames\":%zu,\"vertex_frames\":%.0f,"
         "\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,\"rmse_over_diag\":%.6g,"
-        "\"max_error_over_diag\":%.6g,\"primitives\":[%s]}\n",
+        "\"max_error_over_diag\":%.6g,\"primitives\":[%s]%s}\n",
         json_string(original_path).c_str(), json_string(compressed_path).c_str(), report.vertices, report.frames,
         vertex_frames, bytes, bpvf, bpvf_animation, report.kg_percent, report.rmse_over_diagonal,
-        report.max_error_over_diagonal, primitives.c_str());
+        report.max_error_over_diagonal, primitives.c_str(),
+        above.empty() ? ""
+                      : (",\"error\":{\"code\":\"above_bound\",\"file\":" + json_string(compressed_path) +
+                         ",\"message\":" + json_string(above) + "}")
+                            .c_str());
   } else {
     std::printf(
         "%s against %s: %zu vertices, %zu frames, %zu bytes, %.3f bpvf (animation %.3f), KG %.4f %%, "
@@ -338,6 +356,10 @@ int run_verify(const CommandLine& options) {
         std::printf("  %s: %zu vertices, KG %.4f %%, RMSE %.3g and max error %.3g of the diagonal\n",
                     primitive_label(primitive).c_str(), primitive.vertices, primitive.kg_percent,
                     primitive.rmse_over_diagonal, primitive.max_error_over_diagonal);
+  }
+  if (!above.empty()) {
+    std::fprintf(stderr, "segmorph: error: %s: %s\n", compressed_path.c_str(), above.c_str());
+    return 1;
   }
   return 0;
 }

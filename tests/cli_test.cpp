@@ -184,7 +184,7 @@ TEST(Cli, HelpStatesEveryRangeTheToolHolds) {
       EXPECT_EQ(run(files + " -q " + option + " " + text).exit_code, code) << entry << "\n  value " << text;
     }
   }
-  EXPECT_EQ(ranges, 7) << help;  // --fps, --error, --bpvf, --clusters and the three Draco precisions
+  EXPECT_EQ(ranges, 9) << help;  // --fps, --error, --bpvf, --clusters, the three Draco precisions, verify's bounds
   EXPECT_FALSE(fs::exists(output));
 }
 
@@ -1065,4 +1065,55 @@ TEST(Cli, VerifyReportsEveryPrimitive) {
   EXPECT_EQ(worst, json_number(result.out, "kg_percent"));
   const Result text = run("verify -q " + input + " " + directory + "/robot.glb");
   EXPECT_NE(text.out.find("  Head_3, mesh 4 primitive 0: 876 vertices, KG "), std::string::npos) << text.out;
+}
+
+// verify as a CI gate: above --max-error or --max-bpvf it exits 1 with one line naming the bound (and, with --json,
+// an "above_bound" error in its object); within them, 0. Before, verify had no bound and exited 0 on any error.
+TEST(Cli, VerifyGatesOnItsBounds) {
+  const std::string directory = output_directory("verify_gate");
+  const std::string input = sample("Fox/Fox.glb"), encoded = directory + "/fox.glb";
+  ASSERT_EQ(run("encode -q " + input + " -o " + encoded + " --error 0.15").exit_code, 0);
+  const Result measured = run("verify -q " + input + " " + encoded + " --json");
+  ASSERT_EQ(measured.exit_code, 0) << measured.err;
+  const double kg = json_number(measured.out, "kg_percent"), bpvf = json_number(measured.out, "bpvf");
+  char bounds[128];
+  std::snprintf(bounds, sizeof(bounds), " --max-error %.6g --max-bpvf %.6g", kg * 1.01, bpvf * 1.01);
+  EXPECT_EQ(run("verify -q " + input + " " + encoded + bounds).exit_code, 0);
+
+  std::snprintf(bounds, sizeof(bounds), " --max-error %.6g", kg * 0.99);
+  Result result = run("verify -q " + input + " " + encoded + bounds);
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+  EXPECT_NE(result.err.find("segmorph: error: " + encoded + ": KG "), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("is above --max-error"), std::string::npos) << result.err;
+  EXPECT_NE(result.out.find("KG "), std::string::npos) << "the figures are printed too";
+
+  std::snprintf(bounds, sizeof(bounds), " --max-bpvf %.6g --json", bpvf * 0.99);
+  result = run("verify -q " + input + " " + encoded + bounds);
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.out.find("\"error\":{\"code\":\"above_bound\""), std::string::npos) << result.out;
+  EXPECT_NE(result.err.find("is above --max-bpvf"), std::string::npos) << result.err;
+
+  // Another animation altogether: RiggedSimple's original against the Fox's encode is far above any bound.
+  result = run("verify -q " + sample("RiggedSimple/RiggedSimple.glb") + " " + encoded + " --max-error 1");
+  EXPECT_EQ(result.exit_code, 1) << result.out << result.err;
+  EXPECT_EQ(run("verify -q " + input + " " + encoded + " --max-error -1").exit_code, 2);
+}
+
+// A file compressed with meshopt is refused naming the extension and how to undo it (before: tinygltf's
+// "Invalid 'byteLength'" for EXT_meshopt_compression).
+TEST(Cli, MeshoptFilesAreRefusedByName) {
+  const std::string directory = output_directory("meshopt");
+  const std::string json = simple_morph_in(directory);
+  for (const std::string name : {"EXT_meshopt_compression", "KHR_meshopt_compression"}) {
+    SCOPED_TRACE(name);
+    std::string edited = json;
+    edited.insert(edited.find('{') + 1, "\"extensionsUsed\":[\"" + name + "\"],");
+    write_text(directory + "/in.gltf", edited);
+    const Result result = run("verify -q " + sample("SimpleMorph/SimpleMorph.gltf") + " " + directory + "/in.gltf");
+    EXPECT_EQ(result.exit_code, 1);
+    EXPECT_EQ(result.err, "segmorph: error: " + directory + "/in.gltf: uses " + name +
+                              ", which segmorph does not read: undo it first, for example with glTF-Transform's "
+                              "'gltf-transform copy IN OUT.glb'\n");
+  }
 }
