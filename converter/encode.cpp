@@ -70,6 +70,7 @@ bool keeps_skin(const AnimatedNode& node, const EncodeChoices& choices) {
 Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep, const CodecSettings& codec,
                          const EncodeChoices& choices, const Progress& progress, Encoded& out) {
   out.model = file.model;
+  name_generator(out.model);  // before any size is measured
   out.report = CompressReport();
   out.kept_skins_floor = 0;
   out.modes.assign(file.sampled.size(), PrimitiveMode::frames);

@@ -1,5 +1,7 @@
 #include "gltf_io.h"
 
+#include "segmorph/version.h"
+
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -421,6 +423,22 @@ void repack(tinygltf::Model& model) {
   model.bufferViews = std::move(kept_views);
   model.buffers.clear();
   if (!packed.data.empty()) model.buffers.push_back(std::move(packed));
+}
+
+void name_generator(tinygltf::Model& model) {
+  const std::string ours = "segmorph " + std::to_string(SEGMORPH_VERSION_MAJOR) + "." +
+                           std::to_string(SEGMORPH_VERSION_MINOR) + "." + std::to_string(SEGMORPH_VERSION_PATCH);
+  std::string& generator = model.asset.generator;
+  if (!generator.empty() && generator.rfind("segmorph ", 0) != 0) {
+    tinygltf::Value::Object extras, segmorph;
+    if (model.asset.extras.IsObject()) extras = model.asset.extras.Get<tinygltf::Value::Object>();
+    if (extras.count("segmorph") && extras["segmorph"].IsObject())
+      segmorph = extras["segmorph"].Get<tinygltf::Value::Object>();
+    segmorph["input_generator"] = tinygltf::Value(generator);
+    extras["segmorph"] = tinygltf::Value(std::move(segmorph));
+    model.asset.extras = tinygltf::Value(std::move(extras));
+  }
+  generator = ours;
 }
 
 size_t glb_size(tinygltf::Model model) {

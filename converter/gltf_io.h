@@ -28,6 +28,10 @@ Status save_gltf(tinygltf::Model& model, const std::string& path);
 // The bytes save_gltf would write for `model` as a .glb (images that are files included as it embeds them).
 size_t glb_size(tinygltf::Model model);
 
+// Names segmorph and its version as the model's asset.generator ("segmorph 0.1.0"); a generator that was not
+// segmorph's is kept as asset.extras.segmorph.input_generator.
+void name_generator(tinygltf::Model& model);
+
 // has_gltf_extension(path) is declared in include/segmorph/segmorph.h.
 
 }  // namespace segmorph

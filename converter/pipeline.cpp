@@ -160,6 +160,7 @@ Status bake(Model& model, const SampleSettings& settings, BakeReport* report, co
     for (const SampledNode& node : file.sampled)
       for (const FrameSequence& clip : node.primitives[0].clips) report->frames += clip.frame_count;
   }
+  name_generator(file.model);
   model.data().gltf = std::move(file.model);
   return Status::Ok();
 }
@@ -178,6 +179,7 @@ Status encode(const Model& input, const EncodeSettings& settings, Model& output,
 Status decode(Model& model, DecodeReport* report, std::vector<DecodedFrames>* frames) {
   DecodedSizes sizes;
   SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(model.data().gltf, &sizes, frames));
+  if (sizes.primitives > 0 || sizes.coded_animations > 0) name_generator(model.data().gltf);
   if (report) *report = {sizes.animation_bytes, sizes.primitives, sizes.coded_animations};
   return Status::Ok();
 }

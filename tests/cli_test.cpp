@@ -1117,3 +1117,26 @@ TEST(Cli, MeshoptFilesAreRefusedByName) {
                               "'gltf-transform copy IN OUT.glb'\n");
   }
 }
+
+// Every file segmorph writes names it as asset.generator, with its version; the input's generator is kept in
+// asset.extras.segmorph.input_generator (before: the input's generator stayed, so nothing told which tool wrote it).
+TEST(Cli, OutputsNameSegmorphAsTheirGenerator) {
+  const std::string directory = output_directory("generator");
+  const std::string version = run("--version").out;
+  const std::string ours = version.substr(0, version.find(' ', version.find(' ') + 1));  // "segmorph X.Y.Z"
+  ASSERT_EQ(ours.rfind("segmorph 0.", 0), 0u) << version;
+  std::string json = simple_morph_in(directory);
+  const size_t asset = json.find("\"asset\"");
+  ASSERT_NE(asset, std::string::npos);
+  json.insert(json.find('{', asset) + 1, "\"generator\":\"An exporter 1.0\",");
+  write_text(directory + "/in.gltf", json);
+  ASSERT_EQ(run("encode -q " + directory + "/in.gltf -o " + directory + "/encoded.gltf").exit_code, 0);
+  ASSERT_EQ(run("decode -q " + directory + "/encoded.gltf -o " + directory + "/decoded.gltf").exit_code, 0);
+  ASSERT_EQ(run("bake -q " + directory + "/in.gltf -o " + directory + "/baked.gltf").exit_code, 0);
+  for (const std::string name : {"encoded", "decoded", "baked"}) {
+    SCOPED_TRACE(name);
+    const std::string written = read_text(directory + "/" + name + ".gltf");
+    EXPECT_NE(written.find("\"generator\": \"" + ours + "\""), std::string::npos) << written.substr(0, 400);
+    EXPECT_NE(written.find("\"input_generator\": \"An exporter 1.0\""), std::string::npos) << written.substr(0, 400);
+  }
+}
