@@ -17,7 +17,7 @@ const char* const kCommands =
     "      List the animated primitives of a glTF file: vertices, triangles, kind (morph, skinned or\n"
     "      morph+skinned), clips with their frame counts and durations, connected components, and the\n"
     "      size of the baked frames (V x F x 3 floats).\n"
-    "  bake IN -o OUT [--fps N]\n"
+    "  bake IN -o OUT [--fps N]           (or IN... --output-dir DIR [--jobs N]: see --output-dir)\n"
     "      Write OUT (.glb or .gltf) with every animated primitive baked into POSITION and NORMAL morph\n"
     "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
@@ -43,6 +43,10 @@ const char* const kCommands =
     "      times): bytes, bits per vertex per frame, KG error, RMSE and maximum error over the bounding-box\n"
     "      diagonal, for the worst primitive and for each. With --max-error or --max-bpvf, a gate: exit\n"
     "      status 1 when COMPRESSED is above a bound.\n"
+    "\n"
+    "\n"
+    "An input named - is the standard input (a .glb, or a .gltf whose other files are found from the working\n"
+    "directory).\n"
     "\n"
     "Options (an option's value may also follow '=': --error=0.5):\n";
 
@@ -77,12 +81,23 @@ struct Option {
 // points no longer match their originals; at 30 bits Draco crashed).
 const Option kOptions[] = {
     {"--output", "-o", "FILE", kBake | kEncode | kDecode, Kind::text, 0, 0, false, nullptr, 0,
-     "output file (.glb: binary; .gltf: JSON with FILE's name .bin beside it)",
+     "output file (.glb: binary; .gltf: JSON with FILE's name .bin beside it; -: a .glb on the standard output, "
+     "the report then on stderr)",
      [](CommandLine& line, const std::string& text, double) { line.output = text; }},
     {"--force", nullptr, nullptr, kBake | kEncode | kDecode, Kind::flag, 0, 0, false, nullptr, 0,
      "replace the output even where it is the input or a file the input reads (its .bin, its images); the "
      "replacement is atomic",
      [](CommandLine& line, const std::string&, double) { line.force = true; }},
+    {"--output-dir", nullptr, "DIR", kBake | kEncode | kDecode, Kind::text, 0, 0, false, nullptr, 0,
+     "a batch: take any number of inputs (files, and the .glb and .gltf files under folders) and write each to "
+     "DIR (created if missing) under its own name with the extension .glb, one report per file in input order, "
+     "then a summary line; a file that fails stops no other (exit status 1 when any failed). Two inputs that would "
+     "write the same output are refused before any work",
+     [](CommandLine& line, const std::string& text, double) { line.output_directory = text; }},
+    {"--jobs", "-j", "N", kBake | kEncode | kDecode, Kind::whole, 1, 256, false, nullptr, 0,
+     "with --output-dir: files processed at once, each in a process of its own, {range} (default 1); the outputs "
+     "are the bytes single runs write",
+     [](CommandLine& line, const std::string&, double number) { line.jobs = int(number); }},
     {"--frames", nullptr, "FILE", kDecode, Kind::text, 0, 0, false, nullptr, 0,
      "also write the decoded frames as raw float32 (see decode)",
      [](CommandLine& line, const std::string& text, double) { line.frames = text; }},
@@ -248,6 +263,15 @@ struct Given {
 };
 
 // The rules between options and the command's files, once all are read.
+// Combinations of encode's options that contradict each other.
+bool check_encode_options(const CommandLine& line, std::string& error) {
+  if (line.encode.targets == EncodeSettings::Targets::keep && line.encode.mode == RateMode::lossless)
+    return error = "--targets keep is lossy: it cannot be combined with --lossless", false;
+  if (line.encode.fast_decode && line.encode.mode == RateMode::lossless)
+    return error = "--fast-decode codes lossy residuals: it cannot be combined with --lossless", false;
+  return true;
+}
+
 bool check_command(CommandLine& line, const std::vector<Given>& given, std::string& error) {
   unsigned command = 0;
   for (unsigned c = 0; c < 5; ++c)
@@ -258,6 +282,18 @@ bool check_command(CommandLine& line, const std::vector<Given>& given, std::stri
       return error = option.name + " is not an option of " + line.command + " (it is for " +
                      command_list(option.option->commands) + ")",
              false;
+  bool jobs = false;
+  for (const Given& option : given) jobs |= option.name == "--jobs" || option.name == "-j";
+  if (!line.output_directory.empty()) {
+    if (!line.output.empty()) return error = "give -o or --output-dir, not both", false;
+    if (!line.frames.empty()) return error = "--frames writes one file: it cannot be combined with --output-dir", false;
+    if (line.inputs.empty()) return error = line.command + " --output-dir takes one or more inputs", false;
+    for (const std::string& input : line.inputs)
+      if (input == "-") return error = "a batch reads files: - (the standard input) is a single run's", false;
+    line.encode.sampling = line.sampling;
+    return check_encode_options(line, error);
+  }
+  if (jobs) return error = "--jobs is for batches: give --output-dir", false;
   const size_t inputs = command == kVerify ? 2 : 1;
   if (line.inputs.size() != inputs)
     return error = command == kVerify ? "verify takes two files: ORIGINAL COMPRESSED"
@@ -267,14 +303,14 @@ bool check_command(CommandLine& line, const std::vector<Given>& given, std::stri
   const bool frames_only = command == kDecode && !line.frames.empty() && line.output.empty();
   if ((command & (kBake | kEncode | kDecode)) && !frames_only) {
     if (line.output.empty()) return error = line.command + " needs -o OUT", false;
-    if (!has_gltf_extension(line.output)) return error = "the output must end in .glb or .gltf", false;
+    if (!has_gltf_extension(line.output) && line.output != "-")
+      return error = "the output must end in .glb or .gltf (or be - for a .glb on the standard output)", false;
   }
+  if (line.output == "-" && line.frames == "-") return error = "only one output can be the standard output", false;
+  if (command == kVerify && line.inputs[0] == "-" && line.inputs[1] == "-")
+    return error = "only one input can be the standard input", false;
   line.encode.sampling = line.sampling;
-  if (line.encode.targets == EncodeSettings::Targets::keep && line.encode.mode == RateMode::lossless)
-    return error = "--targets keep is lossy: it cannot be combined with --lossless", false;
-  if (line.encode.fast_decode && line.encode.mode == RateMode::lossless)
-    return error = "--fast-decode codes lossy residuals: it cannot be combined with --lossless", false;
-  return true;
+  return check_encode_options(line, error);
 }
 
 }  // namespace

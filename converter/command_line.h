@@ -21,6 +21,9 @@ struct CommandLine {
   bool quiet = false;
   bool force = false;  // an output may replace the input
   double max_error = -1, max_bpvf = -1;  // verify's bounds; negative: none
+  std::string output_directory;           // a batch: every input's output goes there
+  int jobs = 1;                           // a batch's files at once
+  std::string label;                      // a batch's file: what its progress lines start with
   bool help = false, version = false;
 };
 

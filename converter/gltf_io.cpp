@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <iterator>
 #include <map>
 #include <set>
@@ -278,13 +279,20 @@ bool has_gltf_extension(const std::string& path) {
 }
 
 Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<std::string>* warnings) {
-  std::ifstream file(path, std::ios::binary);
-  struct stat info {};
-  if (!file || stat(path.c_str(), &info) != 0)
-    return Status(StatusCode::io_error, "cannot open: " + std::string(std::strerror(errno)));
-  if (S_ISDIR(info.st_mode)) return Status(StatusCode::io_error, "is a directory, not a glTF file");
-  // Read once; tinygltf parses from memory (its sizes are 32-bit).
-  std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  // Read once; tinygltf parses from memory (its sizes are 32-bit). "-" is the standard input.
+  std::string bytes;
+  if (path == "-") {
+    std::cin.exceptions(std::ios::goodbit);
+    bytes.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
+    if (std::cin.bad()) return Status(StatusCode::io_error, "cannot read the standard input");
+  } else {
+    std::ifstream file(path, std::ios::binary);
+    struct stat info {};
+    if (!file || stat(path.c_str(), &info) != 0)
+      return Status(StatusCode::io_error, "cannot open: " + std::string(std::strerror(errno)));
+    if (S_ISDIR(info.st_mode)) return Status(StatusCode::io_error, "is a directory, not a glTF file");
+    bytes.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+  }
   if (bytes.size() > UINT32_MAX)
     return Status(StatusCode::unsupported, "larger than 4 GiB, which the glTF loader cannot read");
   const bool binary = bytes.compare(0, 4, "glTF") == 0;
@@ -441,9 +449,14 @@ void name_generator(tinygltf::Model& model) {
   generator = ours;
 }
 
+namespace {
+void name_empty_objects(tinygltf::Model& model);
+}  // namespace
+
 size_t glb_size(tinygltf::Model model) {
   repack(model);
   shorten_float_numbers(model);
+  name_empty_objects(model);  // as save_gltf does: the size is the file's
   tinygltf::TinyGLTF writer;
   writer.SetImageWriter(write_no_image, nullptr);
   std::ostringstream stream;
@@ -490,7 +503,7 @@ std::string gltf_json(tinygltf::Model& model, tinygltf::TinyGLTF& writer, const 
 }  // namespace
 
 Status save_gltf(tinygltf::Model& model, const std::string& path) {
-  const bool binary = ends_with(path, ".glb");
+  const bool binary = ends_with(path, ".glb") || path == "-";  // the standard output takes a .glb
   if (!binary && !ends_with(path, ".gltf"))
     return Status(StatusCode::invalid_argument, "output must end in .glb or .gltf");
   repack(model);

@@ -3,9 +3,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <unistd.h>
 #include <string>
 #include <vector>
 
+#include "batch.h"
 #include "command_line.h"
 #include "output_file.h"
 #include "segmorph/segmorph.h"
@@ -58,7 +60,11 @@ int fail(const CommandLine& options, const std::string& file, const Status& stat
 }
 
 void progress(const CommandLine& options, const std::string& message) {
-  if (!options.quiet) std::fprintf(stderr, "segmorph: %s\n", message.c_str());
+  if (options.quiet) return;
+  if (options.label.empty())
+    std::fprintf(stderr, "segmorph: %s\n", message.c_str());
+  else
+    std::fprintf(stderr, "segmorph: %s: %s\n", options.label.c_str(), message.c_str());
 }
 
 std::string json_string(const std::string& s) {
@@ -78,7 +84,7 @@ std::string json_string(const std::string& s) {
 
 // Reads `path` into `model`, its warnings as progress.
 Status load(const std::string& path, const CommandLine& options, Model& model) {
-  progress(options, "reading " + path);
+  progress(options, "reading " + (path == "-" ? std::string("the standard input") : path));
   std::vector<std::string> warnings;
   SEGMORPH_RETURN_IF_ERROR(Model::load(path, model, &warnings));
   for (const std::string& warning : warnings) progress(options, "warning: " + path + ": " + warning);
@@ -88,10 +94,22 @@ Status load(const std::string& path, const CommandLine& options, Model& model) {
 // bake, encode and decode do not write over their own input (or a file it reads) unless --force: a usage error.
 int refuse_replacing_input(const CommandLine& options, const Model& input) {
   for (const std::string* output : {&options.output, &options.frames})
-    if (!output->empty() && writes_over(*output, options.inputs[0], input))
+    if (!output->empty() && *output != "-" && options.inputs[0] != "-" && writes_over(*output, options.inputs[0], input))
       return usage_error(options.json, *output + " would replace the input " + options.inputs[0] +
                          " or a file it reads; give --force to replace it");
   return 0;
+}
+
+// A binary file is not written to a terminal; otherwise 0.
+int refuse_terminal_output(const CommandLine& options) {
+  if ((options.output == "-" || options.frames == "-") && isatty(STDOUT_FILENO))
+    return usage_error(options.json, "the standard output is a terminal: redirect it, or give -o FILE");
+  return 0;
+}
+
+// Where a command's report goes: stdout, unless the output file does.
+FILE* report_stream(const CommandLine& options) {
+  return options.output == "-" || options.frames == "-" ? stderr : stdout;
 }
 
 Progress progress_of(const CommandLine& options) {
@@ -203,6 +221,7 @@ int run_info(const CommandLine& options) {
 }
 
 int run_bake(const CommandLine& options) {
+  if (const int refused = refuse_terminal_output(options)) return refused;
   const std::string& path = options.inputs[0];
   Model model;
   BakeReport report;
@@ -211,7 +230,7 @@ int run_bake(const CommandLine& options) {
     if (const int refused = refuse_replacing_input(options, model)) return refused;
   if (status.ok()) status = bake(model, options.sampling, &report, progress_of(options));
   if (!status.ok()) return fail(options, path, status);
-  progress(options, "writing " + options.output);
+  progress(options, "writing " + (options.output == "-" ? std::string("to the standard output") : options.output));
   status = model.save(options.output);
   if (!status.ok()) return fail(options, options.output, status);
   progress(options, "baked " + std::to_string(report.nodes) + " animated node" + (report.nodes == 1 ? "" : "s") + ", " +
@@ -220,6 +239,7 @@ int run_bake(const CommandLine& options) {
 }
 
 int run_encode(const CommandLine& options) {
+  if (const int refused = refuse_terminal_output(options)) return refused;
   const std::string& path = options.inputs[0];
   Model input, output;
   EncodeReport report;
@@ -228,12 +248,15 @@ int run_encode(const CommandLine& options) {
     if (const int refused = refuse_replacing_input(options, input)) return refused;
   if (status.ok()) status = encode(input, options.encode, output, &report, progress_of(options));
   if (!status.ok()) return fail(options, path, status);
-  progress(options, "writing " + options.output);
+  progress(options, "writing " + (options.output == "-" ? std::string("to the standard output") : options.output));
   status = output.save(options.output);
   if (!status.ok()) return fail(options, options.output, status);
 
   Model written;
-  const size_t bytes = Model::load(options.output, written).ok() ? file_bytes(options.output, written) : 0;
+  const size_t bytes = options.output == "-"                          ? output.glb_size()
+                       : Model::load(options.output, written).ok() ? file_bytes(options.output, written)
+                                                                    : 0;
+  FILE* out = report_stream(options);
   const double vertex_frames = report.vertex_frames;
   double clusters = 0, e_pi = 0, e_pi_morse = 0, ms[5] = {0, 0, 0, 0, 0};
   for (const StreamReport& r : report.streams) {
@@ -245,7 +268,7 @@ int run_encode(const CommandLine& options) {
   }
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
   if (options.json) {
-    std::printf(
+    std::fprintf(out, 
         "{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,"
         "\"rmse_over_diag\":%.6g,\"max_error_over_diag\":%.6g,\"draco_bytes\":%zu,\"animation_bytes\":%zu,"
         "\"streams\":%zu,\"clusters\":%.0f,\"e_pi_morse\":%.6g,\"e_pi\":%.6g,\"milliseconds\":{\"segmentation\":%.1f,"
@@ -257,18 +280,19 @@ int run_encode(const CommandLine& options) {
         report.streams.size(), clusters, e_pi_morse, e_pi, ms[0], ms[1], ms[2], ms[3], ms[4], report.ms_draco,
         report.ms_tracks, report.ms_measure, encoded_primitives_json(report).c_str());
   } else {
-    std::printf("%s: %zu bytes, %.3f bits per vertex per frame (animation streams %zu bytes, Draco meshes %zu bytes), "
+    std::fprintf(out, "%s: %zu bytes, %.3f bits per vertex per frame (animation streams %zu bytes, Draco meshes %zu bytes), "
                 "KG %.4f %% measured on the decoded file",
                 options.output.c_str(), bytes, bpvf, report.animation_bytes, report.draco_bytes, report.kg_percent);
     if (!report.streams.empty())
-      std::printf(", %zu stream%s, %.0f clusters, E(Pi) %.6f (Morse segmentation %.6f)", report.streams.size(),
+      std::fprintf(out, ", %zu stream%s, %.0f clusters, E(Pi) %.6f (Morse segmentation %.6f)", report.streams.size(),
                   report.streams.size() == 1 ? "" : "s", clusters, e_pi, e_pi_morse);
-    std::printf("\n%s", encoded_primitives_text(report).c_str());
+    std::fprintf(out, "\n%s", encoded_primitives_text(report).c_str());
   }
   return 0;
 }
 
 int run_decode(const CommandLine& options) {
+  if (const int refused = refuse_terminal_output(options)) return refused;
   const std::string& path = options.inputs[0];
   Model model;
   DecodeReport report;
@@ -282,7 +306,7 @@ int run_decode(const CommandLine& options) {
     return fail(options, path, Status(StatusCode::nothing_to_do,
                              "not encoded: it has no SEGMORPH_animation_compression primitive or animation"));
   if (!options.output.empty()) {
-    progress(options, "writing " + options.output);
+    progress(options, "writing " + (options.output == "-" ? std::string("to the standard output") : options.output));
     status = model.save(options.output);
     if (!status.ok()) return fail(options, options.output, status);
   }
@@ -312,7 +336,8 @@ int run_verify(const CommandLine& options) {
     const Status original_status = info(original, options.sampling, alone);
     return original_status.ok() ? fail(options, compressed_path, status) : fail(options, original_path, original_status);
   }
-  const size_t bytes = file_bytes(compressed_path, compressed);
+  // The standard input's size is that of the file as a .glb.
+  const size_t bytes = compressed_path == "-" ? compressed.glb_size() : file_bytes(compressed_path, compressed);
   const double vertex_frames = report.vertex_frames;
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
   const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0;
@@ -389,6 +414,12 @@ int run(int argc, char** argv) {
       return 2;
     case ParseResult::run:
       break;
+  }
+  if (!options.output_directory.empty()) {
+    std::vector<BatchFile> files;
+    if (!plan_batch(options.inputs, options.output_directory, files, error)) return usage_error(options.json, error);
+    return run_batch(options, files, options.command == "bake" ? run_bake : options.command == "encode" ? run_encode
+                                                                                                    : run_decode);
   }
   if (options.command == "info") return run_info(options);
   if (options.command == "bake") return run_bake(options);

@@ -114,6 +114,7 @@ struct OutputFile::State {
   int descriptor = -1;
   int slot = -1;
   bool committed = false;
+  bool standard_output = false;  // "-": written in place, nothing to rename or remove
   std::unique_ptr<DescriptorBuffer> buffer;
   std::unique_ptr<std::ostream> stream;
 };
@@ -121,6 +122,7 @@ struct OutputFile::State {
 OutputFile::OutputFile() : state_(new State) {}
 
 OutputFile::~OutputFile() {
+  if (state_->standard_output) return;
   if (state_->descriptor >= 0) close(state_->descriptor);
   if (!state_->temporary.empty() && !state_->committed) unlink(state_->temporary.c_str());
   release_slot(state_->slot);
@@ -129,6 +131,14 @@ OutputFile::~OutputFile() {
 Status OutputFile::open(const std::string& path) {
   State& s = *state_;
   s.path = path;
+  if (path == "-") {
+    s.path = "the standard output";
+    s.standard_output = true;
+    s.descriptor = STDOUT_FILENO;
+    s.buffer.reset(new DescriptorBuffer(s.descriptor));
+    s.stream.reset(new std::ostream(s.buffer.get()));
+    return Status::Ok();
+  }
   const size_t slash = path.find_last_of('/');
   const std::string directory = slash == std::string::npos ? "" : path.substr(0, slash + 1);
   const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
@@ -160,6 +170,10 @@ Status OutputFile::finish() {
   s.stream->flush();
   int error = s.buffer->error();
   if (!error && !*s.stream) error = EIO;
+  if (s.standard_output) {  // a pipe or a terminal: nothing to sync, and the descriptor stays open
+    if (error) return Status(StatusCode::io_error, "cannot write " + s.path + ": " + std::strerror(error));
+    return Status::Ok();
+  }
   if (!error && fsync(s.descriptor) != 0) error = errno;
   if (close(s.descriptor) != 0 && !error) error = errno;
   s.descriptor = -1;
@@ -169,6 +183,7 @@ Status OutputFile::finish() {
 
 Status OutputFile::commit() {
   State& s = *state_;
+  if (s.standard_output) return s.committed = true, Status::Ok();
   if (std::rename(s.temporary.c_str(), s.path.c_str()) != 0)
     return Status(StatusCode::io_error, "cannot write " + s.path + ": " + std::strerror(errno));
   s.committed = true;

@@ -18,7 +18,8 @@ class OutputFile {
   OutputFile(const OutputFile&) = delete;
   OutputFile& operator=(const OutputFile&) = delete;
 
-  // Creates the temporary file for `path` (in path's directory, with the permissions a new file gets).
+  // Creates the temporary file for `path` (in path's directory, with the permissions a new file gets). "-" is the
+  // standard output, written in place: its writes are checked, there is nothing to sync or rename.
   Status open(const std::string& path);
   // Where to write; a failed write is remembered and reported by finish().
   std::ostream& stream();

@@ -162,6 +162,7 @@ TEST(Cli, HelpStatesEveryRangeTheToolHolds) {
   const std::regex range(R"(^  (?:-\w, )?(--[a-z-]+) \S+ +([a-z, ]+): .*(from (\d+) to (\d+)|more than (\S+) and at most (\S+)))");
   const std::string missing = temporary_path("missing.glb"), output = temporary_path("never.glb");
   fs::remove(missing);
+  fs::remove_all(output);
   int ranges = 0;
   for (const std::string& entry : entries) {
     std::smatch match;
@@ -170,7 +171,8 @@ TEST(Cli, HelpStatesEveryRangeTheToolHolds) {
     const std::string option = match[1], command = std::string(match[2]).substr(0, std::string(match[2]).find(','));
     std::string files = command + " " + missing;
     if (command == "verify") files += " " + missing;
-    if (command == "bake" || command == "encode") files += " -o " + output;
+    if (command == "bake" || command == "encode")
+      files += option == "--jobs" ? " --output-dir " + output + ".d" : " -o " + output;
     const bool whole = match[4].matched;
     const double low = std::stod(whole ? match[4] : match[6]), high = std::stod(whole ? match[5] : match[7]);
     std::vector<std::pair<double, int>> cases = {{high, 1}, {high + 1, 2}};
@@ -184,8 +186,9 @@ TEST(Cli, HelpStatesEveryRangeTheToolHolds) {
       EXPECT_EQ(run(files + " -q " + option + " " + text).exit_code, code) << entry << "\n  value " << text;
     }
   }
-  EXPECT_EQ(ranges, 9) << help;  // --fps, --error, --bpvf, --clusters, the three Draco precisions, verify's bounds
+  EXPECT_EQ(ranges, 10) << help;  // --fps, --error, --bpvf, --clusters, the Draco precisions, verify's bounds, --jobs
   EXPECT_FALSE(fs::exists(output));
+  fs::remove_all(output + ".d");  // the batch's folder (its one file was missing)
 }
 
 TEST(Cli, BadInputsFailCleanly) {
@@ -408,6 +411,24 @@ TEST(Cli, OutputThatIsTheInputIsRefusedWithoutForce) {
   EXPECT_EQ(hidden, 0u);
 }
 
+// Runs segmorph with `arguments`, sends it `signal_number` after `delay_ms` and returns its wait status (-1 when it
+// could not be started or waited for).
+int signal_after(const std::vector<std::string>& arguments, int delay_ms, int signal_number) {
+  std::vector<const char*> argv = {SEGMORPH_BINARY};
+  for (const std::string& argument : arguments) argv.push_back(argument.c_str());
+  argv.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    execv(argv[0], const_cast<char* const*>(argv.data()));
+    _exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+  kill(pid, signal_number);
+  int status = 0;
+  return waitpid(pid, &status, 0) == pid ? status : -1;
+}
+
 // SIGINT or SIGTERM at any point of a bake (reading, baking, writing, done) leaves no temporary file, and either no
 // output or a whole one.
 TEST(Cli, SignalsLeaveNoPartialOutput) {
@@ -418,17 +439,8 @@ TEST(Cli, SignalsLeaveNoPartialOutput) {
     for (int delay_ms : {0, 20, 60, 120, 200, 300, 450, 700, 1000, 1500}) {
       SCOPED_TRACE("signal " + std::to_string(signal_number) + " after " + std::to_string(delay_ms) + " ms");
       const std::string fox = sample("Fox/Fox.glb");
-      const char* argv[] = {SEGMORPH_BINARY, "bake", "-q", fox.c_str(), "-o", output.c_str(), "--fps", "120", nullptr};
-      const pid_t pid = fork();
-      ASSERT_GE(pid, 0);
-      if (pid == 0) {
-        execv(argv[0], const_cast<char* const*>(argv));
-        _exit(127);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
-      kill(pid, signal_number);
-      int status = 0;
-      ASSERT_EQ(waitpid(pid, &status, 0), pid);
+      const int status = signal_after({"bake", "-q", fox, "-o", output, "--fps", "120"}, delay_ms, signal_number);
+      ASSERT_GE(status, 0);
       std::vector<std::string> left;
       for (const auto& entry : fs::directory_iterator(directory)) left.push_back(entry.path().filename());
       if (WIFSIGNALED(status)) {
@@ -1139,4 +1151,123 @@ TEST(Cli, OutputsNameSegmorphAsTheirGenerator) {
     EXPECT_NE(written.find("\"generator\": \"" + ours + "\""), std::string::npos) << written.substr(0, 400);
     EXPECT_NE(written.find("\"input_generator\": \"An exporter 1.0\""), std::string::npos) << written.substr(0, 400);
   }
+}
+
+namespace {
+
+// The lines of `text`.
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream stream(text);
+  for (std::string line; std::getline(stream, line);) lines.push_back(line);
+  return lines;
+}
+
+// Encodes every file of `inputs` as one batch (2 jobs) and one by one, and expects the same bytes.
+void expect_batch_bytes_of_single_runs(const std::vector<std::string>& inputs, const std::string& folder,
+                                       const std::string& directory) {
+  const Result batch = run("encode -q " + folder + " --output-dir " + directory + "/batch --jobs 2 --json");
+  const std::vector<std::string> lines = lines_of(batch.out);
+  ASSERT_EQ(lines.size(), inputs.size() + 1) << batch.out << batch.err;
+  size_t failed = 0;
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    SCOPED_TRACE(inputs[i]);
+    EXPECT_NE(lines[i].find(inputs[i]), std::string::npos) << "input order: " << lines[i];
+    const std::string name = fs::path(inputs[i]).stem().string() + ".glb";
+    const Result single = run("encode -q " + inputs[i] + " -o " + directory + "/" + name);
+    if (single.exit_code != 0) {  // a file with nothing to encode fails the same way in the batch
+      ++failed;
+      EXPECT_EQ(lines[i].rfind("{\"error\":", 0), 0u) << lines[i];
+      EXPECT_FALSE(fs::exists(directory + "/batch/" + name));
+      continue;
+    }
+    EXPECT_EQ(read_text(directory + "/batch/" + name), read_text(directory + "/" + name)) << "not the same bytes";
+  }
+  EXPECT_EQ(lines.back(), "{\"files\":" + std::to_string(inputs.size()) + ",\"failed\":" + std::to_string(failed) + "}");
+  EXPECT_EQ(batch.exit_code, failed ? 1 : 0);
+}
+
+}  // namespace
+
+// A batch writes, for each input (files, and the glTF files under folders), the bytes a single run writes, reports
+// each file in input order and ends with a count; a file that fails stops no other (exit status 1); two inputs that
+// would write the same output are refused before any work.
+TEST(Cli, BatchesWriteTheBytesOfSingleRuns) {
+  const std::string directory = output_directory("batch");
+  expect_batch_bytes_of_single_runs(segmorph::testing::bundled_samples(), SEGMORPH_SAMPLES_DIR, directory);
+
+  write_text(directory + "/broken.glb", "not glTF");
+  Result result = run("encode -q " + sample("Fox/Fox.glb") + " " + directory + "/broken.glb " +
+                      sample("RiggedSimple/RiggedSimple.glb") + " --output-dir " + directory + "/mixed -j 2");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_TRUE(fs::exists(directory + "/mixed/Fox.glb"));
+  EXPECT_TRUE(fs::exists(directory + "/mixed/RiggedSimple.glb"));
+  EXPECT_FALSE(fs::exists(directory + "/mixed/broken.glb"));
+  EXPECT_EQ(lines_of(result.out).back(), "3 files, 1 failed");
+  EXPECT_NE(result.err.find("segmorph: error: " + directory + "/broken.glb: not a glTF file"), std::string::npos)
+      << result.err;
+
+  fs::create_directories(directory + "/other");
+  fs::copy_file(sample("Fox/Fox.glb"), directory + "/other/Fox.glb");
+  result = run("encode -q " + sample("Fox/Fox.glb") + " " + directory + "/other --output-dir " + directory + "/clash");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("would both write " + directory + "/clash/Fox.glb"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(directory + "/clash"));
+  EXPECT_EQ(run("encode -q " + sample("Fox/Fox.glb") + " -o " + directory + "/x.glb --jobs 2").exit_code, 2);
+  EXPECT_EQ(run("encode -q - --output-dir " + directory + "/stdin").exit_code, 2);
+  EXPECT_EQ(run("encode -q " + sample("Fox/Fox.glb") + " " + sample("Fox/Fox.glb") + " -o " + directory + "/x.glb")
+                .exit_code,
+            2);
+}
+
+TEST(Cli, BatchOfTheSharedSamplesWritesTheBytesOfSingleRuns) {
+  if (!segmorph::testing::have_shared_samples()) GTEST_SKIP() << "../shared/samples is absent";
+  const std::string folder = std::string(SEGMORPH_SHARED_SAMPLES_DIR) + "/gltf";
+  expect_batch_bytes_of_single_runs(segmorph::testing::gltf_files_under(folder), folder,
+                                    output_directory("batch_shared"));
+}
+
+// - is the standard input and (a .glb) the standard output; the report then goes to stderr. The bytes are those of
+// files.
+TEST(Cli, StandardInputAndOutput) {
+  const std::string directory = output_directory("standard_streams");
+  const std::string segmorph = SEGMORPH_BINARY, fox = sample("Fox/Fox.glb");
+  ASSERT_EQ(run("encode -q " + fox + " -o " + directory + "/file.glb").exit_code, 0);
+  Result result = run_shell("cat " + fox + " | " + segmorph + " encode -q - -o - > " + directory + "/piped.glb");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(read_text(directory + "/piped.glb"), read_text(directory + "/file.glb"));
+  EXPECT_NE(result.err.find("-: "), std::string::npos) << "the report, on stderr: " << result.err;
+  result = run_shell(segmorph + " decode -q " + directory + "/file.glb -o - | " + segmorph + " verify -q " + fox +
+                     " - --max-error 0.15");
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("KG 0.1"), std::string::npos) << result.out;
+  result = run_shell("echo nonsense | " + segmorph + " info -q -");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_EQ(result.err, "segmorph: error: -: not a glTF file (neither GLB nor JSON)\n");
+  EXPECT_EQ(run("verify -q - -").exit_code, 2);
+}
+
+// SIGTERM to a batch reaches the files being written: none is left half written or as a temporary file, and no
+// process of the batch outlives it. (Ctrl-C reaches the whole process group anyway.)
+TEST(Cli, SignalsStopABatchCleanly) {
+  const std::string directory = output_directory("batch_signals");
+  int interrupted = 0;
+  for (int delay_ms : {50, 200, 400, 700}) {
+    SCOPED_TRACE("SIGTERM after " + std::to_string(delay_ms) + " ms");
+    const std::string fox = sample("Fox/Fox.glb"), rigged = sample("RiggedSimple/RiggedSimple.glb");
+    const std::string outputs = directory + "/out";
+    const int status = signal_after(
+        {"bake", "-q", fox, rigged, "--output-dir", outputs, "--fps", "120", "--jobs", "2"}, delay_ms, SIGTERM);
+    ASSERT_GE(status, 0);
+    interrupted += WIFSIGNALED(status);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // children that were told to stop have stopped
+    if (fs::exists(outputs))
+      for (const auto& entry : fs::directory_iterator(outputs)) {
+        const std::string name = entry.path().filename();
+        EXPECT_TRUE(name == "Fox.glb" || name == "RiggedSimple.glb") << name << " left";
+        EXPECT_EQ(run("info -q " + entry.path().string()).exit_code, 0) << name << " is not whole";
+      }
+    fs::remove_all(outputs);
+  }
+  EXPECT_GT(interrupted, 0) << "no signal came before the end: the test did not test";
 }
