@@ -117,7 +117,8 @@ double trajectory_gap(const std::vector<FrameSequence>& reference, const std::ve
 
 Status compare_animation(const tinygltf::Model& reference_model, const Scene& reference_scene,
                          const std::vector<SampledNode>& reference, const tinygltf::Model& other_model,
-                         const Scene& other_scene, AnimationComparison& result) {
+                         const Scene& other_scene, AnimationComparison& result, bool encoded_from_reference,
+                         VertexMatches* matches) {
   result = AnimationComparison();
   std::vector<Eigen::Matrix4d> reference_global, other_global;
   evaluate_global_transforms(reference_model, reference_scene.graph, nullptr, 0, reference_global);
@@ -148,10 +149,15 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
     // Each primitive's counterpart (node, primitive): the baked node's, else the nearest over every node
     // with a mesh, screened on the first, middle and last frames of the first clips only.
     std::vector<std::pair<const AnimatedNode*, size_t>> pairs(want.primitives.size(), {nullptr, 0});
+    const auto same_node = std::find_if(other_nodes.begin(), other_nodes.end(),
+                                        [&](const AnimatedNode& other) { return other.node == node.node; });
     if (const AnimatedNode* baked = baked_from(node.node, other_model, other_nodes)) {
       if (other_model.meshes[size_t(baked->mesh)].primitives.size() != want.primitives.size())
         return Status(StatusCode::bad_data, label + ": the primitives differ");
       for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {baked, p};
+    } else if (encoded_from_reference && same_node != other_nodes.end() &&
+               other_model.meshes[size_t(same_node->mesh)].primitives.size() == want.primitives.size()) {
+      for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {&*same_node, p};
     } else {
       std::vector<std::vector<size_t>> screen_frames(times.size());
       std::vector<std::vector<float>> screen_times(times.size());
@@ -189,7 +195,19 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
       if (b[0].vertex_count == 0) return Status(StatusCode::bad_data, "has no vertices for " + label);
 
       // The other's vertices in the reference's order.
-      const std::vector<uint32_t> match = match_vertices(a, b);
+      std::vector<uint32_t> computed;
+      const std::vector<uint32_t>* kept = nullptr;
+      if (matches) {
+        const auto found = matches->find({node.node, p});
+        if (found != matches->end() && found->second.size() == a[0].vertex_count &&
+            std::all_of(found->second.begin(), found->second.end(), [&](uint32_t v) { return v < b[0].vertex_count; }))
+          kept = &found->second;
+      }
+      if (!kept) {
+        computed = match_vertices(a, b);
+        if (matches) kept = &((*matches)[{node.node, p}] = std::move(computed));
+      }
+      const std::vector<uint32_t>& match = kept ? *kept : computed;
       ErrorAccumulator accumulator;
       for (size_t c = 0; c < a.size(); ++c) {
         FrameSequence matched = a[c];

@@ -6,6 +6,9 @@
 #include <tiny_gltf.h>
 
 #include <cstddef>
+#include <cstdint>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include "metrics.h"
@@ -40,8 +43,15 @@ struct AnimationComparison {
 // sampling space through both nodes' static global transforms, which undoes a quantizing tool's
 // dequantization transform (KHR_mesh_quantization). Vertices pair by trajectory (match_vertices). A failed
 // Status is about `other`.
+//
+// `encoded_from_reference`: `other` is segmorph's encode of the reference (decoded), whose nodes keep their indices:
+// a node that was not baked is paired with the node of the same index, without the search by trajectory.
+// `matches`, when given, keeps each primitive's vertex pairing (by reference node and primitive) from one call to
+// the next: a search that compares encodes differing only in their tracks pairs the vertices once.
+using VertexMatches = std::map<std::pair<int, size_t>, std::vector<uint32_t>>;
 Status compare_animation(const tinygltf::Model& reference_model, const Scene& reference_scene,
                          const std::vector<SampledNode>& reference, const tinygltf::Model& other_model,
-                         const Scene& other_scene, AnimationComparison& result);
+                         const Scene& other_scene, AnimationComparison& result, bool encoded_from_reference = false,
+                         VertexMatches* matches = nullptr);
 
 }  // namespace segmorph

@@ -109,7 +109,7 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
   say(kept_skins.empty() ? "coding the animation tracks" : "coding the animation tracks, measuring the kept skins' error");
   TrackCoding tracks;
   const auto begin = std::chrono::steady_clock::now();
-  SEGMORPH_RETURN_IF_ERROR(code_tracks(file, codec, !kept_skins.empty(), out.model, tracks));
+  SEGMORPH_RETURN_IF_ERROR(code_tracks(file, codec, !kept_skins.empty(), out.model, tracks, progress));
   out.ms_tracks = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
   out.report.animation_bytes += tracks.bytes;
   out.kept_skins_floor = tracks.kept_skins_floor;
@@ -193,7 +193,7 @@ Status measure(const SampledFile& file, const Encoded& encoded, EncodeReport& re
   AnimationComparison comparison;
   Status status = analyze_model(encoded.model, SampleSettings(), false, {}, decoded);
   if (status.ok())
-    status = compare_animation(file.model, file.scene, file.sampled, decoded.model, decoded.scene, comparison);
+    status = compare_animation(file.model, file.scene, file.sampled, decoded.model, decoded.scene, comparison, true);
   if (!status.ok()) return Status(StatusCode::internal, "measuring the encode against the input: " + status.message());
   for (const PrimitiveComparison& compared : comparison.primitives) {
     EncodedPrimitive primitive;

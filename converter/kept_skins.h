@@ -22,7 +22,9 @@ struct TrackCoding {
 // error target: at the coarsest quantization distance whose measured worst KG is within kErrorTargetMargin of the
 // target (a bracket by doublings or halvings, then bisections in log distance); otherwise at a distance in
 // proportion to the error target and the scene's diagonal.
+// The search measures on a subsample of frames (at most 24 per clip), then checks its choice on every frame, halving
+// the distance while that is above the goal; each measurement is a progress line.
 Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kept_skins, tinygltf::Model& model,
-                   TrackCoding& coding);
+                   TrackCoding& coding, const Progress& progress);
 
 }  // namespace segmorph

@@ -1271,3 +1271,14 @@ TEST(Cli, SignalsStopABatchCleanly) {
   }
   EXPECT_GT(interrupted, 0) << "no signal came before the end: the test did not test";
 }
+
+// The kept skins' error search says what it measures as it goes (before: silent for over a minute on a large
+// file), on a subsample of frames, then its choice on every frame.
+TEST(Cli, KeptSkinSearchReportsEachMeasurement) {
+  const std::string directory = output_directory("kept_skin_progress");
+  const Result result = run("encode " + sample("Fox/Fox.glb") + " -o " + directory + "/fox.glb");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("segmorph: kept skins: tracks within "), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("(a subsample of frames, measurement 1)"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("(every frame, measurement "), std::string::npos) << result.err;
+}
