@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 
 #include "bake.h"
@@ -113,6 +114,36 @@ double trajectory_gap(const std::vector<FrameSequence>& reference, const std::ve
   return total / double(samples);
 }
 
+// Each primitive of `want`'s counterpart (node, primitive) in the other file: the nearest over every node with a
+// mesh, screened on the first, middle and last frames of the first clips only.
+Status nearest_counterparts(const tinygltf::Model& other_model, const Scene& other_scene,
+                            const std::vector<AnimatedNode>& other_nodes, const SampledNode& want,
+                            const std::vector<int>& clips, const std::vector<std::vector<float>>& times,
+                            const std::function<Eigen::Matrix4d(const AnimatedNode&)>& to_reference,
+                            std::vector<std::pair<const AnimatedNode*, size_t>>& pairs) {
+  std::vector<std::vector<size_t>> screen_frames(times.size());
+  std::vector<std::vector<float>> screen_times(times.size());
+  for (size_t c = 0; c < times.size(); ++c) {
+    const size_t last = times[c].size() - 1;
+    screen_frames[c] = c < 4 ? std::vector<size_t>{0, last / 2, last} : std::vector<size_t>{0};
+    screen_frames[c].erase(std::unique(screen_frames[c].begin(), screen_frames[c].end()), screen_frames[c].end());
+    for (size_t f : screen_frames[c]) screen_times[c].push_back(times[c][f]);
+  }
+  std::vector<double> nearest(want.primitives.size(), INFINITY);
+  for (const AnimatedNode& candidate : other_nodes) {
+    Counterpart screened;
+    SEGMORPH_RETURN_IF_ERROR(sample_counterpart(other_model, other_scene, candidate, clips, screen_times,
+                                                to_reference(candidate), screened));
+    for (size_t p = 0; p < want.primitives.size(); ++p)
+      for (size_t q = 0; q < screened.sampled.primitives.size(); ++q) {
+        const double gap =
+            trajectory_gap(want.primitives[p].clips, screen_frames, screened.sampled.primitives[q].clips);
+        if (gap < nearest[p]) nearest[p] = gap, pairs[p] = {&candidate, q};
+      }
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status compare_animation(const tinygltf::Model& reference_model, const Scene& reference_scene,
@@ -146,8 +177,8 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
                                                   : (reference_to_model.inverse() * other_to_model).eval();
     };
 
-    // Each primitive's counterpart (node, primitive): the baked node's, else the nearest over every node
-    // with a mesh, screened on the first, middle and last frames of the first clips only.
+    // Each primitive's counterpart (node, primitive): the baked node's, the same node in segmorph's own encode,
+    // else the nearest (nearest_counterparts).
     std::vector<std::pair<const AnimatedNode*, size_t>> pairs(want.primitives.size(), {nullptr, 0});
     const auto same_node = std::find_if(other_nodes.begin(), other_nodes.end(),
                                         [&](const AnimatedNode& other) { return other.node == node.node; });
@@ -159,26 +190,8 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
                other_model.meshes[size_t(same_node->mesh)].primitives.size() == want.primitives.size()) {
       for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {&*same_node, p};
     } else {
-      std::vector<std::vector<size_t>> screen_frames(times.size());
-      std::vector<std::vector<float>> screen_times(times.size());
-      for (size_t c = 0; c < times.size(); ++c) {
-        const size_t last = times[c].size() - 1;
-        screen_frames[c] = c < 4 ? std::vector<size_t>{0, last / 2, last} : std::vector<size_t>{0};
-        screen_frames[c].erase(std::unique(screen_frames[c].begin(), screen_frames[c].end()), screen_frames[c].end());
-        for (size_t f : screen_frames[c]) screen_times[c].push_back(times[c][f]);
-      }
-      std::vector<double> nearest(want.primitives.size(), INFINITY);
-      for (const AnimatedNode& candidate : other_nodes) {
-        Counterpart screened;
-        SEGMORPH_RETURN_IF_ERROR(sample_counterpart(other_model, other_scene, candidate, clips, screen_times,
-                                                    to_reference(candidate), screened));
-        for (size_t p = 0; p < want.primitives.size(); ++p)
-          for (size_t q = 0; q < screened.sampled.primitives.size(); ++q) {
-            const double gap =
-                trajectory_gap(want.primitives[p].clips, screen_frames, screened.sampled.primitives[q].clips);
-            if (gap < nearest[p]) nearest[p] = gap, pairs[p] = {&candidate, q};
-          }
-      }
+      SEGMORPH_RETURN_IF_ERROR(
+          nearest_counterparts(other_model, other_scene, other_nodes, want, clips, times, to_reference, pairs));
     }
 
     std::map<const AnimatedNode*, Counterpart> sampled;  // every frame of each node paired with

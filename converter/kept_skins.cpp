@@ -61,7 +61,8 @@ Status measured_kg(const SampledFile& file, const std::vector<SampledNode>& refe
   Scene scene;
   SEGMORPH_RETURN_IF_ERROR(analyze_scene(encoded, scene));
   AnimationComparison comparison;
-  SEGMORPH_RETURN_IF_ERROR(compare_animation(file.model, file.scene, reference, encoded, scene, comparison, true, &matches));
+  SEGMORPH_RETURN_IF_ERROR(
+      compare_animation(file.model, file.scene, reference, encoded, scene, comparison, true, &matches));
   kg = comparison.worst.kg_percent;
   return Status::Ok();
 }
@@ -84,10 +85,9 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
   const std::vector<SampledNode> subsample = thinned(file.sampled);
   bool whole = true;  // the subsample is every frame (no clip longer than kSearchFrames)
   for (size_t n = 0; n < subsample.size(); ++n)
-    whole = whole && subsample[n].primitives[0].clips.size() == file.sampled[n].primitives[0].clips.size() &&
-                  std::equal(subsample[n].primitives[0].clips.begin(), subsample[n].primitives[0].clips.end(),
-                             file.sampled[n].primitives[0].clips.begin(),
-                             [](const FrameSequence& a, const FrameSequence& b) { return a.frame_count == b.frame_count; });
+    for (size_t c = 0; c < subsample[n].primitives[0].clips.size(); ++c)
+      whole = whole && subsample[n].primitives[0].clips[c].frame_count ==
+                           file.sampled[n].primitives[0].clips[c].frame_count;
   tinygltf::Model candidate;
   double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
   int measurements = 0;
