@@ -41,7 +41,8 @@ Status PointCacheReader::open(const std::string& path) {
   uint64_t expected = 0;
   if (size >= kPc2HeaderBytes && std::memcmp(header, kPc2Magic, sizeof(kPc2Magic)) == 0) {
     format_ = Format::pc2;
-    const uint32_t version = little_u32(header + 12), points = little_u32(header + 16), samples = little_u32(header + 28);
+    const uint32_t version = little_u32(header + 12), points = little_u32(header + 16);
+    const uint32_t samples = little_u32(header + 28);
     start_ = as_float(little_u32(header + 20));
     rate_ = as_float(little_u32(header + 24));
     if (version != 1) return bad("PC2 version " + std::to_string(version) + " (only version 1 is defined)");

@@ -26,7 +26,9 @@ void put_float(std::string& out, float value, bool big) {
 }
 
 // Point p of frame f: (f + p / 10, -p, 0.5 f).
-float coordinate(size_t f, size_t p, int c) { return c == 0 ? float(f) + float(p) / 10 : c == 1 ? -float(p) : 0.5f * f; }
+float coordinate(size_t f, size_t p, int c) {
+  return c == 0 ? float(f) + float(p) / 10 : c == 1 ? -float(p) : 0.5f * float(f);
+}
 
 std::string pc2(uint32_t points, uint32_t samples, float start, float rate, uint32_t version = 1) {
   std::string out("POINTCACHE2\0", 12);
