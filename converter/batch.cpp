@@ -53,21 +53,6 @@ std::string read_all(FILE* file) {
   return text;
 }
 
-std::string json_text(const std::string& s) {
-  std::string out = "\"";
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\', out += char(c);
-    } else if (c < 0x20) {
-      char escaped[8];
-      std::snprintf(escaped, sizeof(escaped), "\\u%04x", c);
-      out += escaped;
-    } else {
-      out += char(c);
-    }
-  }
-  return out + "\"";
-}
 
 }  // namespace
 
@@ -107,7 +92,7 @@ int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, i
                  failure.message().c_str());
     if (options.json)
       std::printf("{\"error\":{\"code\":\"io_error\",\"file\":%s,\"message\":\"cannot create the folder\"}}\n",
-                  json_text(options.output_directory).c_str());
+                  json_string(options.output_directory).c_str());
     return 1;
   }
   struct sigaction action, previous_interrupt, previous_terminate;
@@ -173,8 +158,8 @@ int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, i
                                  strsignal(WTERMSIG(status)) + ")";
         std::fprintf(stderr, "segmorph: error: %s: %s\n", input.c_str(), what.c_str());
         if (options.json)
-          report += "{\"error\":{\"code\":\"internal\",\"file\":" + json_text(input) + ",\"message\":" +
-                    json_text(what) + "}}\n";
+          report += "{\"error\":{\"code\":\"internal\",\"file\":" + json_string(input) + ",\"message\":" +
+                    json_string(what) + "}}\n";
       }
       if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) ++failed;
       reports[child->file] = std::move(report);

@@ -32,8 +32,6 @@ const char* code_name(StatusCode code) {
   return "internal";
 }
 
-std::string json_string(const std::string& s);
-
 // An error: one line on stderr and, with --json, one object on stdout.
 void print_error(bool json, const char* code, const std::string& file, const std::string& message) {
   if (file.empty())
@@ -67,20 +65,6 @@ void progress(const CommandLine& options, const std::string& message) {
     std::fprintf(stderr, "segmorph: %s: %s\n", options.label.c_str(), message.c_str());
 }
 
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\')
-      out += '\\', out += char(c);
-    else if (c < 0x20) {
-      char buffer[8];
-      std::snprintf(buffer, sizeof(buffer), "\\u%04x", c);
-      out += buffer;
-    } else
-      out += char(c);
-  }
-  return out + "\"";
-}
 
 // Reads `path` into `model`, its warnings as progress.
 Status load(const std::string& path, const CommandLine& options, Model& model) {

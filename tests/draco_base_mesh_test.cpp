@@ -35,6 +35,26 @@ BaseMesh sphere_mesh() {
   return mesh;
 }
 
+// Whether the decoded triangles, their corners mapped through `source`, are the original ones (as sets of corners,
+// rotation aside).
+void expect_original_triangles(const BaseMesh& mesh, const BaseMesh& decoded, const std::vector<uint32_t>& source) {
+  std::vector<std::array<uint32_t, 3>> original, mapped;
+  for (size_t t = 0; t < mesh.triangles.size(); t += 3) {
+    std::array<uint32_t, 3> a = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
+    std::sort(a.begin(), a.end());
+    original.push_back(a);
+  }
+  for (size_t t = 0; t < decoded.triangles.size(); t += 3) {
+    std::array<uint32_t, 3> b = {source[decoded.triangles[t]], source[decoded.triangles[t + 1]],
+                                 source[decoded.triangles[t + 2]]};
+    std::sort(b.begin(), b.end());
+    mapped.push_back(b);
+  }
+  std::sort(original.begin(), original.end());
+  std::sort(mapped.begin(), mapped.end());
+  EXPECT_EQ(original, mapped);
+}
+
 TEST(DracoBaseMesh, SequentialRoundTripKeepsVertexOrderWithinQuantization) {
   const BaseMesh mesh = sphere_mesh();
   std::vector<uint8_t> bytes;
@@ -90,19 +110,8 @@ TEST(DracoBaseMesh, EdgebreakerVerticesMatchBackToTheirOriginals) {
       EXPECT_NEAR(decoded.attributes[0].values[p * 3 + size_t(c)], mesh.attributes[0].values[source[p] * 3 + size_t(c)], 4.0 / 16383);
   }
   EXPECT_GT(moved, 0u) << "edgebreaker kept the order: this test no longer tests the matching";
-  // ...under which the decoded triangles are the original ones (as sets of corners, rotation aside).
-  std::vector<std::array<uint32_t, 3>> original, mapped;
-  for (size_t t = 0; t < mesh.triangles.size(); t += 3) {
-    std::array<uint32_t, 3> a = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
-    std::array<uint32_t, 3> b = {source[decoded.triangles[t]], source[decoded.triangles[t + 1]], source[decoded.triangles[t + 2]]};
-    std::sort(a.begin(), a.end());
-    std::sort(b.begin(), b.end());
-    original.push_back(a);
-    mapped.push_back(b);
-  }
-  std::sort(original.begin(), original.end());
-  std::sort(mapped.begin(), mapped.end());
-  EXPECT_EQ(original, mapped);
+  // ...under which the decoded triangles are the original ones.
+  expect_original_triangles(mesh, decoded, source);
 }
 
 // `mesh` through Draco and back, and the original of each decoded vertex.
@@ -133,19 +142,8 @@ TEST(DracoBaseMesh, VerticesMatchAtEveryPrecisionAwayFromTheOrigin) {
       ASSERT_FALSE(seen[source[p]]) << bits << " bits";
       seen[source[p]] = true;
     }
-    std::vector<std::array<uint32_t, 3>> original, mapped;
-    for (size_t t = 0; t < mesh.triangles.size(); t += 3) {
-      std::array<uint32_t, 3> a = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
-      std::array<uint32_t, 3> b = {source[decoded.triangles[t]], source[decoded.triangles[t + 1]],
-                                   source[decoded.triangles[t + 2]]};
-      std::sort(a.begin(), a.end());
-      std::sort(b.begin(), b.end());
-      original.push_back(a);
-      mapped.push_back(b);
-    }
-    std::sort(original.begin(), original.end());
-    std::sort(mapped.begin(), mapped.end());
-    EXPECT_EQ(original, mapped) << bits << " bits";
+    SCOPED_TRACE(std::to_string(bits) + " bits");
+    expect_original_triangles(mesh, decoded, source);
   }
 }
 
@@ -168,22 +166,8 @@ TEST(DracoBaseMesh, VerticesWithinAStepOfAnotherPartMatchThroughTheirTriangles) 
   BaseMesh decoded;
   std::vector<uint32_t> source;
   ASSERT_TRUE(round_trip(mesh, settings, decoded, source));
-  std::vector<std::array<uint32_t, 3>> original, mapped;
-  for (size_t t = 0; t < mesh.triangles.size(); t += 3) {
-    std::array<uint32_t, 3> a = {mesh.triangles[t], mesh.triangles[t + 1], mesh.triangles[t + 2]};
-    std::sort(a.begin(), a.end());
-    original.push_back(a);
-  }
-  for (size_t t = 0; t < decoded.triangles.size(); t += 3) {
-    std::array<uint32_t, 3> b = {source[decoded.triangles[t]], source[decoded.triangles[t + 1]],
-                                 source[decoded.triangles[t + 2]]};
-    std::sort(b.begin(), b.end());
-    mapped.push_back(b);
-  }
-  std::sort(original.begin(), original.end());
-  std::sort(mapped.begin(), mapped.end());
   EXPECT_EQ(decoded.vertex_count, mesh.vertex_count);
-  EXPECT_EQ(original, mapped);
+  expect_original_triangles(mesh, decoded, source);
 }
 
 // On the sequences, whose parts touch (the chicken has 41 components): under the match, every decoded triangle is
