@@ -446,7 +446,12 @@ TEST(Cli, SignalsLeaveNoPartialOutput) {
       if (WIFSIGNALED(status)) {
         ++interrupted;
         EXPECT_EQ(WTERMSIG(status), signal_number);
-        EXPECT_TRUE(left.empty()) << left.size() << " files left, the first " << left[0];
+        // Before the rename nothing is left; a signal after it (between the rename and the exit, seen in the
+        // sanitizer build at 1000 ms) finds the output whole. Never a temporary file or a partial output.
+        if (!left.empty()) {
+          ASSERT_EQ(left, std::vector<std::string>{"out.glb"});
+          EXPECT_EQ(run("info -q " + output).exit_code, 0) << "a whole file";
+        }
       } else {
         ASSERT_TRUE(WIFEXITED(status));
         EXPECT_EQ(WEXITSTATUS(status), 0);
