@@ -13,17 +13,17 @@ const char* const kCommands =
     "usage: segmorph <command> [options]\n"
     "\n"
     "Commands:\n"
-    "  info FILE [--json] [--fps N]\n"
+    "  info FILE [--cache C] [--json] [--fps N]\n"
     "      List the animated primitives of a glTF file: vertices, triangles, kind (morph, skinned or\n"
     "      morph+skinned), clips with their frame counts and durations, connected components, and the\n"
     "      size of the baked frames (V x F x 3 floats).\n"
-    "  bake IN -o OUT [--fps N]\n"
+    "  bake IN -o OUT [--cache C] [--fps N]\n"
     "      Write OUT (.glb or .gltf) with every animated primitive baked into POSITION and NORMAL morph\n"
     "      targets, one per frame, played by one weights animation per clip (sparse one-hot weights).\n"
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
-    "  encode IN -o OUT [--error E | --bpvf R | --lossless] [--fps N] [--clusters K] [--position-bits B]\n"
-    "         [--normal-bits B] [--texcoord-bits B] [--skins keep|bake] [--targets auto|keep|bake]\n"
-    "         [--fast-decode] [--json]\n"
+    "  encode IN -o OUT [--cache C] [--error E | --bpvf R | --lossless] [--fps N] [--clusters K]\n"
+    "         [--position-bits B] [--normal-bits B] [--texcoord-bits B] [--skins keep|bake]\n"
+    "         [--targets auto|keep|bake] [--fast-decode] [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
     "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
     "      (see --targets); a skinned mesh keeps its skin (see --skins). Meshes that animated nodes move\n"
@@ -37,7 +37,7 @@ const char* const kCommands =
     "      primitive (meshes in order, then their primitives), clip by clip, frame by frame, vertex by\n"
     "      vertex, x y z; the frames are positions, except for kept morph targets: one clip of their\n"
     "      POSITION displacements (docs/runtime.md).\n"
-    "  verify ORIGINAL COMPRESSED [--max-error E] [--max-bpvf R] [--json] [--fps N]\n"
+    "  verify ORIGINAL COMPRESSED [--cache C] [--cache2 C] [--max-error E] [--max-bpvf R] [--json] [--fps N]\n"
     "      Compare the animation of two files (either may be encoded, baked, original or written by another\n"
     "      tool: primitives and vertices are paired by trajectory, COMPRESSED is sampled at ORIGINAL's frame\n"
     "      times): bytes, bits per vertex per frame, KG error, RMSE and maximum error over the bounding-box\n"
@@ -47,6 +47,9 @@ const char* const kCommands =
     "bake, encode and decode also run as a batch: IN... --output-dir DIR [--jobs N] (see --output-dir).\n"
     "An input named - is the standard input (a .glb, or a .gltf whose other files are found from the working\n"
     "directory).\n"
+    "The input of info, bake, encode and verify may also be a vertex cache: an OBJ sequence (a folder, or a name\n"
+    "with %04d), or a base mesh (.obj, .glb, .gltf) with its PC2 or MDD point cache (--cache); it reads as the\n"
+    "glTF bake would write for it (docs/caches.md).\n"
     "\n"
     "Options (an option's value may also follow '=': --error=0.5):\n";
 
@@ -101,9 +104,23 @@ const Option kOptions[] = {
     {"--frames", nullptr, "FILE", kDecode, Kind::text, 0, 0, false, nullptr, 0,
      "also write the decoded frames as raw float32 (see decode)",
      [](CommandLine& line, const std::string& text, double) { line.frames = text; }},
+    {"--cache", nullptr, "FILE", kInfo | kBake | kEncode | kVerify, Kind::text, 0, 0, false, nullptr, 0,
+     "a PC2 or MDD point cache that moves the input, its base mesh: an .obj (the cache's points are its v lines, in "
+     "order) or a .glb or .gltf of one unanimated mesh (its vertices, primitive after primitive); with verify, the "
+     "cache of ORIGINAL. An input that is a folder, or a name with one %d or %04d (frames/walk_%04d.obj), is an OBJ "
+     "sequence: one .obj per frame, ordered by the number in their names (docs/caches.md)",
+     [](CommandLine& line, const std::string& text, double) { line.cache = text; }},
+    {"--z-up", nullptr, nullptr, kInfo | kBake | kEncode | kVerify, Kind::flag, 0, 0, false, nullptr, 0,
+     "the vertex caches and their OBJ meshes are Z up (Blender's own axes; its MDD exporter writes nothing else): "
+     "turn them to glTF's Y up, (x, y, z) to (x, z, -y). A glTF base mesh is Y up already and is not turned",
+     [](CommandLine& line, const std::string&, double) { line.z_up = true; }},
+    {"--cache2", nullptr, "FILE", kVerify, Kind::text, 0, 0, false, nullptr, 0,
+     "the point cache that moves COMPRESSED, its base mesh (see --cache)",
+     [](CommandLine& line, const std::string& text, double) { line.cache2 = text; }},
     {"--fps", nullptr, "N", kInfo | kBake | kEncode | kVerify, Kind::number, 0, 1000, true, nullptr, 0,
      "sample every clip on a regular grid of N frames per second, {range}; by default the union of the clip's key "
-     "times, or 30 fps where keys are denser than 60 per second",
+     "times, or 30 fps where keys are denser than 60 per second. For an OBJ sequence or a PC2 cache, N is instead "
+     "their frame rate (default 30), and every frame is kept; an MDD cache has its own times",
      [](CommandLine& line, const std::string&, double number) { line.sampling.fps = number; }},
     {"--error", nullptr, "E", kEncode, Kind::number, 0, 100, true, nullptr, 1,
      "KG error target in percent, {range} (default 0.15)",
@@ -288,6 +305,8 @@ bool check_command(CommandLine& line, const std::vector<Given>& given, std::stri
     if (!line.output.empty()) return error = "give -o or --output-dir, not both", false;
     if (!line.frames.empty()) return error = "--frames writes one file: it cannot be combined with --output-dir", false;
     if (line.inputs.empty()) return error = line.command + " --output-dir takes one or more inputs", false;
+    if (!line.cache.empty())
+      return error = "--cache names one input's cache: it cannot be combined with --output-dir", false;
     for (const std::string& input : line.inputs)
       if (input == "-") return error = "a batch reads files: - (the standard input) is a single run's", false;
     line.encode.sampling = line.sampling;

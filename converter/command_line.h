@@ -15,6 +15,8 @@ struct CommandLine {
   std::vector<std::string> inputs;
   std::string output;  // -o; empty only where the command writes no glTF file
   std::string frames;  // decode --frames: the decoded frames as raw floats
+  bool z_up = false;          // --z-up: the caches and OBJ meshes are Z up
+  std::string cache, cache2;  // --cache: the point cache of the first input (a base mesh); --cache2: of verify's second
   SampleSettings sampling;
   EncodeSettings encode;  // its sampling is `sampling`
   bool json = false;

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <string>
 #include <vector>
@@ -49,8 +50,10 @@ int usage_error(bool json, const std::string& message) {
 }
 
 int fail(const CommandLine& options, const std::string& file, const Status& status) {
-  // Messages may quote bytes of a corrupt file: control characters would break the one-line promise.
+  // Messages may quote bytes of a corrupt file: control characters would break the one-line promise. A message that
+  // starts with the file's name (a vertex cache's, which reads several files) does not repeat it.
   std::string message = status.message();
+  if (message.compare(0, file.size() + 2, file + ": ") == 0) message.erase(0, file.size() + 2);
   for (char& c : message)
     if ((unsigned char)c < 0x20 || c == 0x7f) c = '?';
   print_error(options.json, code_name(status.code()), file, message);
@@ -66,13 +69,79 @@ void progress(const CommandLine& options, const std::string& message) {
 }
 
 
-// Reads `path` into `model`, its warnings as progress.
+Progress progress_of(const CommandLine& options) {
+  return [&options](const std::string& message) { progress(options, message); };
+}
+
+// Reads the glTF file `path` into `model`, its warnings as progress.
 Status load(const std::string& path, const CommandLine& options, Model& model) {
   progress(options, "reading " + (path == "-" ? std::string("the standard input") : path));
   std::vector<std::string> warnings;
   SEGMORPH_RETURN_IF_ERROR(Model::load(path, model, &warnings));
   for (const std::string& warning : warnings) progress(options, "warning: " + path + ": " + warning);
   return Status::Ok();
+}
+
+// True when `path` names an OBJ sequence: a folder, or a name with a % (a printf pattern) that is not a glTF's.
+bool is_obj_sequence(const std::string& path) {
+  struct stat info {};
+  if (stat(path.c_str(), &info) == 0) return S_ISDIR(info.st_mode);
+  return path.find('%') != std::string::npos && !has_gltf_extension(path);
+}
+
+bool has_suffix(const std::string& path, const char* suffix) {
+  const size_t n = std::strlen(suffix);
+  if (path.size() < n) return false;
+  for (size_t i = 0; i < n; ++i)
+    if (std::tolower((unsigned char)path[path.size() - n + i]) != suffix[i]) return false;
+  return true;
+}
+
+// Reads input `index` into `model`: a glTF file, or a vertex cache (an OBJ sequence, or a base mesh with its point
+// cache, --cache or --cache2). `sampling`: how to sample it (a cache's every frame, unless --fps resamples an MDD).
+Status load_input(size_t index, const CommandLine& options, Model& model, SampleSettings& sampling) {
+  const std::string& path = options.inputs[index];
+  const std::string& cache = index == 0 ? options.cache : options.cache2;
+  sampling = options.sampling;
+  if (cache.empty() && !is_obj_sequence(path)) {
+    if (has_suffix(path, ".obj"))
+      return Status(StatusCode::invalid_argument, "an .obj alone is one frame: give its point cache with --cache, "
+                                                  "or an OBJ sequence as a folder or a pattern (walk_%04d.obj)");
+    if (has_suffix(path, ".pc2") || has_suffix(path, ".mdd"))
+      return Status(StatusCode::invalid_argument, "a point cache moves a base mesh: give the mesh (.obj, .glb or "
+                                                  ".gltf) as the input and the cache with --cache");
+    return load(path, options, model);
+  }
+  CacheSource source;
+  source.mesh = path;
+  source.cache = cache;
+  if (options.sampling.fps > 0) source.fps = options.sampling.fps;
+  source.z_up = options.z_up;
+  CacheReport report;
+  SEGMORPH_RETURN_IF_ERROR(Model::load_cache(source, model, &report, progress_of(options)));
+  char line[256];
+  std::snprintf(line, sizeof(line), "%s: %zu frames of %zu points (%zu glTF vertices), %.4g s to %.4g s",
+                report.format.c_str(), report.frames, report.points, report.vertices, report.first_time,
+                report.last_time);
+  progress(options, line);
+  if (!(report.format == "MDD" && options.sampling.fps > 0)) sampling = report.sampling;
+  return Status::Ok();
+}
+
+// The bytes of input `index`: its files (a glTF's with its .bin and images; a point cache and its mesh); an OBJ
+// sequence's or the standard input's, those of the glTF it reads as (a .glb).
+size_t input_bytes(size_t index, const CommandLine& options, const Model& model) {
+  const std::string& path = options.inputs[index];
+  const std::string& cache = index == 0 ? options.cache : options.cache2;
+  if (path == "-") return model.glb_size();
+  if (cache.empty() && !is_obj_sequence(path)) return file_bytes(path, model);
+  if (cache.empty()) return model.glb_size();  // an OBJ sequence: the glTF it reads as
+  size_t bytes = 0;
+  for (const std::string& file : {path, cache}) {
+    struct stat info {};
+    if (!file.empty() && stat(file.c_str(), &info) == 0 && S_ISREG(info.st_mode)) bytes += size_t(info.st_size);
+  }
+  return bytes;
 }
 
 // bake, encode and decode do not write over their own input (or a file it reads) unless --force: a usage error.
@@ -96,9 +165,6 @@ FILE* report_stream(const CommandLine& options) {
   return options.output == "-" || options.frames == "-" ? stderr : stdout;
 }
 
-Progress progress_of(const CommandLine& options) {
-  return [&options](const std::string& message) { progress(options, message); };
-}
 
 std::string primitive_label(const PrimitiveError& primitive) {
   return (primitive.node_name.empty() ? "node " + std::to_string(primitive.node) : primitive.node_name) + ", mesh " +
@@ -159,8 +225,9 @@ int run_info(const CommandLine& options) {
   const std::string& path = options.inputs[0];
   Model model;
   InfoReport report;
-  Status status = load(path, options, model);
-  if (status.ok()) status = info(model, options.sampling, report, progress_of(options));
+  SampleSettings sampling;
+  Status status = load_input(0, options, model, sampling);
+  if (status.ok()) status = info(model, sampling, report, progress_of(options));
   if (!status.ok()) return fail(options, path, status);
 
   std::string json = "{\"file\":" + json_string(path) + ",\"primitives\":[";
@@ -209,10 +276,11 @@ int run_bake(const CommandLine& options) {
   const std::string& path = options.inputs[0];
   Model model;
   BakeReport report;
-  Status status = load(path, options, model);
+  SampleSettings sampling;
+  Status status = load_input(0, options, model, sampling);
   if (status.ok() && !options.force)
     if (const int refused = refuse_replacing_input(options, model)) return refused;
-  if (status.ok()) status = bake(model, options.sampling, &report, progress_of(options));
+  if (status.ok()) status = bake(model, sampling, &report, progress_of(options));
   if (!status.ok()) return fail(options, path, status);
   progress(options, "writing " + (options.output == "-" ? std::string("to the standard output") : options.output));
   status = model.save(options.output);
@@ -227,10 +295,11 @@ int run_encode(const CommandLine& options) {
   const std::string& path = options.inputs[0];
   Model input, output;
   EncodeReport report;
-  Status status = load(path, options, input);
+  EncodeSettings settings = options.encode;
+  Status status = load_input(0, options, input, settings.sampling);
   if (status.ok() && !options.force)
     if (const int refused = refuse_replacing_input(options, input)) return refused;
-  if (status.ok()) status = encode(input, options.encode, output, &report, progress_of(options));
+  if (status.ok()) status = encode(input, settings, output, &report, progress_of(options));
   if (!status.ok()) return fail(options, path, status);
   progress(options, "writing " + (options.output == "-" ? std::string("to the standard output") : options.output));
   status = output.save(options.output);
@@ -308,20 +377,21 @@ int run_decode(const CommandLine& options) {
 int run_verify(const CommandLine& options) {
   const std::string &original_path = options.inputs[0], &compressed_path = options.inputs[1];
   Model original, compressed;
-  Status status = load(original_path, options, original);
+  SampleSettings sampling, compressed_sampling;
+  Status status = load_input(0, options, original, sampling);
   if (!status.ok()) return fail(options, original_path, status);
-  status = load(compressed_path, options, compressed);
+  status = load_input(1, options, compressed, compressed_sampling);
   if (!status.ok()) return fail(options, compressed_path, status);
   VerifyReport report;
-  status = verify(original, compressed, options.sampling, report, progress_of(options));
+  status = verify(original, compressed, sampling, report, progress_of(options));
   if (!status.ok()) {
     // Which file is at fault: the original when it cannot be sampled alone.
     InfoReport alone;
-    const Status original_status = info(original, options.sampling, alone);
+    const Status original_status = info(original, sampling, alone);
     return original_status.ok() ? fail(options, compressed_path, status) : fail(options, original_path, original_status);
   }
   // The standard input's size is that of the file as a .glb.
-  const size_t bytes = compressed_path == "-" ? compressed.glb_size() : file_bytes(compressed_path, compressed);
+  const size_t bytes = input_bytes(1, options, compressed);
   const double vertex_frames = report.vertex_frames;
   const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
   const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0;

@@ -29,6 +29,10 @@ class PointCacheReader {
   Format format() const { return format_; }
   size_t point_count() const { return points_; }
   size_t frame_count() const { return frames_; }
+  const std::string& path() const { return path_; }
+  // PC2's header: the first sample's frame number, and frames between samples.
+  float pc2_start() const { return start_; }
+  float pc2_rate() const { return rate_; }
   // Each frame's time in seconds: MDD's own; PC2's frame number (start + f x rate) divided by `fps`.
   std::vector<float> times(double fps) const;
 

@@ -56,38 +56,6 @@ struct PrimitiveInput {
   std::vector<double> influence_weight;    // normalized to sum 1 per vertex
 };
 
-Status read_triangles(const tinygltf::Model& model, const tinygltf::Primitive& primitive, size_t vertex_count,
-                      const std::string& what, std::vector<uint32_t>& triangles) {
-  std::vector<uint32_t> indices;
-  if (primitive.indices >= 0) {
-    SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", indices));
-    for (uint32_t i : indices)
-      if (i >= vertex_count) return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
-  } else {
-    indices.resize(vertex_count);
-    for (size_t i = 0; i < vertex_count; ++i) indices[i] = uint32_t(i);
-  }
-  triangles.clear();
-  switch (primitive.mode) {
-    case TINYGLTF_MODE_TRIANGLES:
-      triangles.assign(indices.begin(), indices.begin() + long(indices.size() / 3 * 3));
-      break;
-    case TINYGLTF_MODE_TRIANGLE_STRIP:
-      for (size_t i = 2; i < indices.size(); ++i) {
-        const bool even = i % 2 == 0;  // every other triangle of a strip flips to keep the winding
-        triangles.insert(triangles.end(), {indices[i - 2], indices[even ? i - 1 : i], indices[even ? i : i - 1]});
-      }
-      break;
-    case TINYGLTF_MODE_TRIANGLE_FAN:
-      for (size_t i = 2; i < indices.size(); ++i)
-        triangles.insert(triangles.end(), {indices[i - 1], indices[i], indices[0]});
-      break;
-    default:
-      break;  // points and lines: no surface
-  }
-  return Status::Ok();
-}
-
 Status read_skin_influences(const tinygltf::Model& model, const tinygltf::Primitive& primitive, size_t joint_count,
                             const std::string& what, PrimitiveInput& input) {
   const size_t vertex_count = input.vertex_count;
@@ -147,6 +115,38 @@ Status read_skin_influences(const tinygltf::Model& model, const tinygltf::Primit
 }
 
 }  // namespace
+
+Status read_triangles(const tinygltf::Model& model, const tinygltf::Primitive& primitive, size_t vertex_count,
+                      const std::string& what, std::vector<uint32_t>& triangles) {
+  std::vector<uint32_t> indices;
+  if (primitive.indices >= 0) {
+    SEGMORPH_RETURN_IF_ERROR(read_uints(model, primitive.indices, what + " indices", indices));
+    for (uint32_t i : indices)
+      if (i >= vertex_count) return Status(StatusCode::bad_data, what + ": an index exceeds the vertex count");
+  } else {
+    indices.resize(vertex_count);
+    for (size_t i = 0; i < vertex_count; ++i) indices[i] = uint32_t(i);
+  }
+  triangles.clear();
+  switch (primitive.mode) {
+    case TINYGLTF_MODE_TRIANGLES:
+      triangles.assign(indices.begin(), indices.begin() + long(indices.size() / 3 * 3));
+      break;
+    case TINYGLTF_MODE_TRIANGLE_STRIP:
+      for (size_t i = 2; i < indices.size(); ++i) {
+        const bool even = i % 2 == 0;  // every other triangle of a strip flips to keep the winding
+        triangles.insert(triangles.end(), {indices[i - 2], indices[even ? i - 1 : i], indices[even ? i : i - 1]});
+      }
+      break;
+    case TINYGLTF_MODE_TRIANGLE_FAN:
+      for (size_t i = 2; i < indices.size(); ++i)
+        triangles.insert(triangles.end(), {indices[i - 1], indices[i], indices[0]});
+      break;
+    default:
+      break;  // points and lines: no surface
+  }
+  return Status::Ok();
+}
 
 std::string node_name(const tinygltf::Model& model, int node) {
   const std::string& name = model.nodes[size_t(node)].name;

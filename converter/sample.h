@@ -55,6 +55,11 @@ struct SampledPrimitive {
 Status read_rest_attributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive, const std::string& what,
                             SampledPrimitive& out);
 
+// The triangles of `primitive` (of `vertex_count` vertices): its TRIANGLES, or its strip or fan as triangles with
+// their winding kept; none for points and lines. Indices beyond the vertex count fail, naming `what`.
+Status read_triangles(const tinygltf::Model& model, const tinygltf::Primitive& primitive, size_t vertex_count,
+                      const std::string& what, std::vector<uint32_t>& triangles);
+
 // Positions under morph targets as glTF renders them: rest + Σ_t weights[t] × deltas[t] (deltas: per target V × 3,
 // empty for a target without POSITION), in double: a float rest plus one float delta is exact, so one-hot
 // sequences reproduce their frames bit for bit. out: V × 3.

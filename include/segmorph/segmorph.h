@@ -23,6 +23,9 @@ namespace segmorph {
 // One line of progress on long work ("encoding mesh 1 primitive 0 (2904 vertices)"); empty: no progress.
 using Progress = std::function<void(const std::string& message)>;
 
+struct CacheSource;
+struct CacheReport;
+
 // A glTF 2.0 asset in memory: what load() read, what the functions below transform.
 class Model {
  public:
@@ -36,6 +39,12 @@ class Model {
   // Reads a .glb or a .gltf (its buffers and images resolved beside it). `warnings` receives what the loader let
   // pass. Fails on anything that is not valid enough to process, with a one-line message.
   static Status load(const std::string& path, Model& model, std::vector<std::string>* warnings = nullptr);
+
+  // Reads a vertex cache (docs/caches.md) as the glTF bake would write for it: the base mesh with one morph target
+  // per frame, played by a one-hot weights animation named after the cache. `report` says what was read and how to
+  // sample the model so that every frame is kept. Fails on any bad input with one line naming the file (and frame).
+  static Status load_cache(const CacheSource& source, Model& model, CacheReport* report = nullptr,
+                           const Progress& progress = {});
 
   // Writes `path`: binary if it ends in .glb, JSON with a .bin beside it if it ends in .gltf, whole or not at all.
   // The data is repacked into one buffer first (the model changes accordingly).
@@ -67,6 +76,31 @@ struct SampleSettings {
   double fps = 0;
   static constexpr double kMaxKeyRate = 60;
   static constexpr double kDefaultFps = 30;
+};
+
+// A vertex cache, read by Model::load_cache.
+struct CacheSource {
+  // An OBJ sequence: a folder of .obj files, one per frame, ordered by the number in their names, or a printf
+  // pattern such as frames/walk_%04d.obj; the numbers must be consecutive. With `cache`: the base mesh the cache
+  // moves, an .obj (the cache's points are its v lines) or a .glb or .gltf of one mesh (its vertices, primitive after
+  // primitive), unanimated.
+  std::string mesh;
+  std::string cache;  // a PC2 or MDD point cache; empty for an OBJ sequence
+  // Frames per second of an OBJ sequence and of a PC2 cache's frame numbers (an MDD cache has its own times).
+  double fps = 30;
+  // The cache and an OBJ mesh are Z up (Blender's own axes, which its MDD exporter always writes): turned to glTF's
+  // Y up, (x, y, z) -> (x, z, -y). A glTF base mesh is Y up already and stays as it is.
+  bool z_up = false;
+};
+
+struct CacheReport {
+  std::string format;  // "OBJ sequence", "PC2" or "MDD"
+  size_t points = 0;   // the cache's points (the OBJ's v lines)
+  size_t vertices = 0, frames = 0;  // of the glTF primitive(s) it became
+  double first_time = 0, last_time = 0;  // seconds
+  // Sampling that keeps every frame: at the keys (fps 0) up to SampleSettings::kMaxKeyRate frames per second, at
+  // the cache's own rate above that.
+  SampleSettings sampling;
 };
 
 // --- info ---

@@ -70,7 +70,13 @@ for input in $files; do
          report=$("$segmorph" verify -q "$input" "$plain" --json); then
         kg=$(echo "$report" | sed 's/.*"kg_percent":\([^,}]*\).*/\1/')
         echo "$input: gltfpack -vp 14 measures KG $kg %"
-        awk -v kg="$kg" 'BEGIN { exit !(kg < 0.5) }' || { echo "FAIL $input: KG $kg % is not below 0.5"; failures=$((failures + 1)); }
+        # WavingFlag's morph weights go down to -1; gltfpack 1.3 stores weights as normalized unsigned bytes, which
+        # clamps them to 0 (the flag no longer waves back): verify must see that loss (4.8 %).
+        if [ "$name" = flag ]; then
+          awk -v kg="$kg" 'BEGIN { exit !(kg > 1) }' || { echo "FAIL $input: KG $kg % misses gltfpack's clamped weights"; failures=$((failures + 1)); }
+        else
+          awk -v kg="$kg" 'BEGIN { exit !(kg < 0.5) }' || { echo "FAIL $input: KG $kg % is not below 0.5"; failures=$((failures + 1)); }
+        fi
       else
         echo "FAIL gltfpack/meshopt_decode/validate/verify $input"; failures=$((failures + 1))
       fi
