@@ -67,22 +67,23 @@ class CandidateCost {
   double operator()(const Clusters& merged, uint8_t flags) const {
     const EncodeProblem& p = problem_;
     const Clusters candidate =
-        refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency, kSampleRefinements);
+        refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency, kSampleRefinements, nullptr,
+                         p.settings.threads);
     StreamContent trial = content_;
     trial.flags = flags;
     trial.clip_frames = sample_.clip_frames;
     trial.cluster_count = uint32_t(candidate.count);
     trial.labels = candidate.label;
-    const AffineMotion motion = fit_affine_motion(p.base_welded.data(), sample_.frames, candidate);
+    const AffineMotion motion = fit_affine_motion(p.base_welded.data(), sample_.frames, candidate, p.settings.threads);
     const double motion_step = kMotionStepRatio * p.mean_step;
     quantize_motion_and_weights(motion, motion_step / cluster_radius(p.base_welded, motion.centroid, candidate.label),
                                 motion_step, p.base_welded, sample_.frames, candidate, p.adjacency,
                                 p.settings.blend_weights, trial);
-    const std::vector<double> trial_predictions = predicted_frames(trial, p.base_welded);
+    const std::vector<double> trial_predictions = predicted_frames(trial, p.base_welded, p.settings.threads);
     const std::vector<double> steps = {p.mean_step, 2 * p.mean_step};
     SubbandCurve measured[3];
     measure_subbands(trial, p.traversal, trial_predictions, sample_.frames.positions, p.multiplicity,
-                     {steps, steps, steps}, measured);
+                     {steps, steps, steps}, measured, p.settings.threads);
     std::vector<uint8_t> side;
     write_stream(trial, p.base, side);
     double distortion[2], bits[2];

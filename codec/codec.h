@@ -28,6 +28,9 @@ struct CodecSettings {
   bool table_residuals = false;
   // Bytes of the output outside this stream (the base mesh, the container) that a bpvf target includes.
   size_t outside_bytes = 0;
+  // Threads for the stages that split their work (parallel.h); 0: every hardware thread. The stream is the same
+  // bytes for every number.
+  size_t threads = 1;
 };
 
 // clips: the primitive's clips (same V and triangles; frame 0 of clip 0 is the base frame). base: V × 3, the

@@ -108,7 +108,8 @@ Status segment(const EncodeProblem& p, Clusters& clusters, StreamReport& report)
   const MorseSettings morse_settings;
   clusters = morse_segmentation(morse.mu, p.topology, p.adjacency, morse_settings, &bands);
   report.e_pi_morse = motion_compensation_error(p.base_welded.data(), p.trajectories, clusters,
-                                                fit_affine_motion(p.base_welded.data(), p.trajectories, clusters));
+                                                fit_affine_motion(p.base_welded.data(), p.trajectories, clusters,
+                                                                  p.settings.threads));
   if (p.settings.curvature_refinement) {
     const MorseBands refined = refine_levels(morse.mu, minimum_curvature(positions, p.topology), p.topology,
                                              p.adjacency, bands, RefinementSettings(), &report.curvature_refinement_passes);
@@ -173,9 +174,10 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   clusters = choose_clusters(problem, clusters, content);
   if (settings.motion_refinement) {
     clusters = refine_by_motion(clusters, problem.base_welded.data(), problem.trajectories, problem.adjacency, 8,
-                                &report.motion_refinement_iterations);
+                                &report.motion_refinement_iterations, settings.threads);
   }
-  const AffineMotion fitted = fit_affine_motion(problem.base_welded.data(), problem.trajectories, clusters);
+  const AffineMotion fitted =
+      fit_affine_motion(problem.base_welded.data(), problem.trajectories, clusters, settings.threads);
   report.e_pi = motion_compensation_error(problem.base_welded.data(), problem.trajectories, clusters, fitted);
   report.clusters = clusters.count;
   content.cluster_count = uint32_t(clusters.count);

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "metrics.h"
+#include "parallel.h"
 
 namespace segmorph {
 namespace {
@@ -19,7 +20,8 @@ inline void apply(const double* transform, const double* c, const float* x, doub
 
 }  // namespace
 
-AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters) {
+AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
+                               size_t threads) {
   const size_t vertex_count = frames.vertex_count, cluster_count = clusters.count;
   assert(clusters.label.size() == vertex_count);
   AffineMotion motion;
@@ -57,37 +59,40 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
   // rounding, kept so that B does not depend on where the frame sits).
   std::vector<Eigen::Vector3d> centred_sum(cluster_count, Eigen::Vector3d::Zero());
   for (size_t v = 0; v < vertex_count; ++v) centred_sum[clusters.label[v]] += centred[v];
-  std::vector<Eigen::Matrix3d> moments(cluster_count);
-  std::vector<Eigen::Vector3d> mean(cluster_count);
-  for (size_t f = 0; f < frames.frame_count; ++f) {
-    const float* frame = frames.frame(f);
-    for (size_t k = 0; k < cluster_count; ++k) moments[k].setZero(), mean[k].setZero();
-    for (size_t v = 0; v < vertex_count; ++v) {
-      const uint32_t k = clusters.label[v];
-      const Eigen::Vector3d y(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]);
-      mean[k] += y;
-      moments[k] += y * centred[v].transpose();
-    }
-    for (size_t k = 0; k < cluster_count; ++k) {
-      mean[k] /= double(std::max<size_t>(size[k], 1));
-      moments[k] -= mean[k] * centred_sum[k].transpose();
-    }
-    for (size_t k = 0; k < cluster_count; ++k) {
-      Eigen::JacobiSVD<Eigen::Matrix3d> svd(moments[k], Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
-      if (rotation.determinant() < 0) {
-        Eigen::Matrix3d u = svd.matrixU();
-        u.col(2) *= -1;
-        rotation = u * svd.matrixV().transpose();
+  // Each frame's fit is its own: the frames are split over threads.
+  parallel_ranges(frames.frame_count, thread_count(threads), [&](size_t begin, size_t end) {
+    std::vector<Eigen::Matrix3d> moments(cluster_count);
+    std::vector<Eigen::Vector3d> mean(cluster_count);
+    for (size_t f = begin; f < end; ++f) {
+      const float* frame = frames.frame(f);
+      for (size_t k = 0; k < cluster_count; ++k) moments[k].setZero(), mean[k].setZero();
+      for (size_t v = 0; v < vertex_count; ++v) {
+        const uint32_t k = clusters.label[v];
+        const Eigen::Vector3d y(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]);
+        mean[k] += y;
+        moments[k] += y * centred[v].transpose();
       }
-      const Eigen::Matrix3d linear = (moments[k] + rho[k] * rotation) * inverse[k];
-      double* transform = motion.transform(f, k);
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) transform[r * 4 + c] = linear(r, c);
-        transform[r * 4 + 3] = mean[k](r);
+      for (size_t k = 0; k < cluster_count; ++k) {
+        mean[k] /= double(std::max<size_t>(size[k], 1));
+        moments[k] -= mean[k] * centred_sum[k].transpose();
+      }
+      for (size_t k = 0; k < cluster_count; ++k) {
+        Eigen::JacobiSVD<Eigen::Matrix3d> svd(moments[k], Eigen::ComputeFullU | Eigen::ComputeFullV);
+        Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
+        if (rotation.determinant() < 0) {
+          Eigen::Matrix3d u = svd.matrixU();
+          u.col(2) *= -1;
+          rotation = u * svd.matrixV().transpose();
+        }
+        const Eigen::Matrix3d linear = (moments[k] + rho[k] * rotation) * inverse[k];
+        double* transform = motion.transform(f, k);
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) transform[r * 4 + c] = linear(r, c);
+          transform[r * 4 + 3] = mean[k](r);
+        }
       }
     }
-  }
+  });
   return motion;
 }
 

@@ -21,8 +21,10 @@ struct Trajectories {
 };
 
 // Eq. 1: per cluster and frame, the least-squares affine map from the base positions (W × 3) to the frame,
-// regularized towards the cluster's rigid motion so that flat or tiny clusters stay well behaved.
-AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters);
+// regularized towards the cluster's rigid motion so that flat or tiny clusters stay well behaved. The frames are
+// fitted on up to `threads` threads (0: every hardware thread), with the same result for any number.
+AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
+                               size_t threads = 1);
 
 // E(Π) of the paper's Table 2: mean squared distance between each vertex and its cluster's affine image of
 // its base position, over all vertices and frames, divided by the squared bounding-box diagonal of the base.

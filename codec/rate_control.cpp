@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "parallel.h"
+#include "prediction.h"
 #include "stream_format.h"
 
 namespace segmorph {
@@ -65,18 +67,16 @@ void quantize_lanes(size_t count, double weight, const double* __restrict p, con
   }
 }
 
-}  // namespace
-
 // The subbands and steps are measured together, in one walk over the frames: every array below holds, per
 // welded vertex, one value per lane (an axis and a candidate step) side by side (position i, lane s at
 // i · S + s). The lanes' loops are independent, so the processor overlaps them instead of waiting on one
 // vertex's chain of dependent operations at a time; each lane still sees exactly the arithmetic of the
 // decoder's loop, in the same order. Arrays are by position in the traversal, so the walk reads them front to
 // back and a vertex's earlier neighbours are mostly close behind.
-void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
-                      const std::vector<double>& predictions, const std::vector<float>& targets,
-                      const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                      SubbandCurve (&curves)[3]) {
+void measure_lanes(const StreamContent& content, const ResidualTraversal& traversal,
+                   const std::vector<double>& predictions, const std::vector<float>& targets,
+                   const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
+                   SubbandCurve (&curves)[3]) {
   const size_t welded = multiplicity.size();
   const bool temporal = content.flags & format::kFlagTemporalResiduals;
   const bool spatial = content.flags & format::kFlagSpatialResiduals;
@@ -143,6 +143,58 @@ void measure_subbands(const StreamContent& content, const ResidualTraversal& tra
     curve.distortion.push_back(distortion[s]);
     curve.bits.push_back(entropy[s].bits());
   }
+}
+
+}  // namespace
+
+// The lanes split into contiguous ranges, one walk over the frames per thread (a lane's arithmetic does not depend
+// on the others'), the ranges' measurements appended in lane order: the same curves for every thread count.
+void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
+                      const std::vector<double>& predictions, const std::vector<float>& targets,
+                      const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
+                      SubbandCurve (&curves)[3], size_t threads) {
+  const size_t lanes = steps[0].size() + steps[1].size() + steps[2].size();
+  // Each range walks every frame's predictions and targets: at least two lanes a thread make that worth it.
+  const size_t ranges = std::min(thread_count(threads), std::max<size_t>(lanes / 2, 1));
+  struct Curves {
+    SubbandCurve axis[3];
+  };
+  std::vector<Curves> measured(ranges);
+  std::vector<size_t> range_begin(ranges + 1);
+  for (size_t r = 0; r <= ranges; ++r) range_begin[r] = lanes * r / ranges;
+  parallel_ranges(ranges, ranges, [&](size_t begin, size_t end) {
+    for (size_t r = begin; r < end; ++r) {
+      // The range's lanes, axis by axis (lanes are numbered axis after axis).
+      std::vector<double> subset[3];
+      size_t lane = 0;
+      for (int axis = 0; axis < 3; ++axis)
+        for (double step : steps[axis]) {
+          if (lane >= range_begin[r] && lane < range_begin[r + 1]) subset[axis].push_back(step);
+          ++lane;
+        }
+      measure_lanes(content, traversal, predictions, targets, multiplicity, subset, measured[r].axis);
+    }
+  });
+  for (size_t r = 0; r < ranges; ++r)
+    for (int axis = 0; axis < 3; ++axis) {
+      const SubbandCurve& from = measured[r].axis[axis];
+      SubbandCurve& to = curves[axis];
+      to.step.insert(to.step.end(), from.step.begin(), from.step.end());
+      to.distortion.insert(to.distortion.end(), from.distortion.begin(), from.distortion.end());
+      to.bits.insert(to.bits.end(), from.bits.begin(), from.bits.end());
+    }
+}
+
+std::vector<double> predicted_frames(const StreamContent& content, const std::vector<float>& welded, size_t threads) {
+  const AffineMotion motion = dequantized_motion(content, welded);
+  const ClusterWeights weights = dequantized_weights(content);
+  const size_t row = size_t(content.welded_count) * 3;
+  std::vector<double> predictions(content.frame_count() * row);
+  const FramePredictor predictor(welded.data(), motion, weights);
+  parallel_ranges(content.frame_count(), thread_count(threads), [&](size_t begin, size_t end) {
+    for (size_t f = begin; f < end; ++f) predictor.predict(f, &predictions[f * row]);
+  });
+  return predictions;
 }
 
 StepChoice choose_steps(const SubbandCurve (&curves)[3], double lambda) {

@@ -19,11 +19,16 @@ struct SubbandCurve {
 
 // Closed-loop D(q) and R(q) of the three subbands at more candidate steps (steps[axis], any number each; the
 // measurements are appended to curves[axis]): the decoder's residual loop (reconstruction.h) with the content's
-// flags and clips. predictions, targets: F × W × 3; multiplicity: W (original vertices per welded vertex).
+// flags and clips. predictions, targets: F × W × 3; multiplicity: W (original vertices per welded vertex). The
+// steps are measured on up to `threads` threads (0: every hardware thread), with the same results for any number.
 void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
                       const std::vector<double>& predictions, const std::vector<float>& targets,
                       const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                      SubbandCurve (&curves)[3]);
+                      SubbandCurve (&curves)[3], size_t threads = 1);
+
+// reconstruction.h's predicted_frames, the frames split over up to `threads` threads (0: every hardware thread): the
+// same predictions, F × W × 3.
+std::vector<double> predicted_frames(const StreamContent& content, const std::vector<float>& welded, size_t threads);
 
 struct StepChoice {
   size_t index[3] = {0, 0, 0};  // into each curve

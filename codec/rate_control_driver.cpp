@@ -72,7 +72,8 @@ void RateControlDriver::extend(const std::vector<double> (&candidates)[3]) {
           std::find(steps[axis].begin(), steps[axis].end(), step) == steps[axis].end())
         steps[axis].push_back(step);
     }
-  measure_subbands(content_, p_.traversal, predictions_, p_.trajectories.positions, p_.multiplicity, steps, curves_);
+  measure_subbands(content_, p_.traversal, predictions_, p_.trajectories.positions, p_.multiplicity, steps, curves_,
+                   settings_.threads);
 }
 
 // Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1, ±2), after widening the
@@ -112,7 +113,7 @@ void RateControlDriver::prepare_motion(double motion_step) {
                               content_);
   report_.ms_motion += milliseconds_since(begin);
   begin = EncodeClock::now();
-  predictions_ = predicted_frames(content_, p_.base_welded);
+  predictions_ = predicted_frames(content_, p_.base_welded, settings_.threads);
   report_.ms_prediction += milliseconds_since(begin);
 }
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "parallel.h"
+
 namespace segmorph {
 namespace {
 
@@ -86,49 +88,51 @@ MorseBands refine_levels(const std::vector<double>& mu, const std::vector<double
 }
 
 Clusters refine_by_motion(const Clusters& clusters, const float* base, const Trajectories& frames,
-                          const VertexAdjacency& adjacency, int max_iterations, int* iterations_out) {
+                          const VertexAdjacency& adjacency, int max_iterations, int* iterations_out, size_t threads) {
   Clusters refined = clusters;
   const size_t vertex_count = frames.vertex_count;
   int iterations = 0;
-  std::vector<uint32_t> candidates;
   for (; iterations < max_iterations; ++iterations) {
-    const AffineMotion motion = fit_affine_motion(base, frames, refined);
+    const AffineMotion motion = fit_affine_motion(base, frames, refined, threads);
     std::vector<uint32_t> label = refined.label;
-    size_t moved = 0;
-    for (size_t v = 0; v < vertex_count; ++v) {
-      candidates.assign(1, refined.label[v]);
-      for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i) {
-        const uint32_t k = refined.label[adjacency.neighbour[i]];
-        if (std::find(candidates.begin(), candidates.end(), k) == candidates.end()) candidates.push_back(k);
-      }
-      if (candidates.size() == 1) continue;
-      // Squared prediction error of vertex v under cluster k's transforms, over all frames (stops past limit).
-      auto error_of = [&](uint32_t k, double limit) {
-        double error = 0;
-        const double* c = &motion.centroid[k * 3];
-        const double d[3] = {base[v * 3] - c[0], base[v * 3 + 1] - c[1], base[v * 3 + 2] - c[2]};
-        for (size_t f = 0; f < frames.frame_count && error < limit; ++f) {
-          const double* t = motion.transform(f, k);
-          for (int r = 0; r < 3; ++r) {
-            const double e = t[r * 4] * d[0] + t[r * 4 + 1] * d[1] + t[r * 4 + 2] * d[2] + t[r * 4 + 3] -
-                             frames.frame(f)[v * 3 + size_t(r)];
-            error += e * e;
-          }
+    // Each vertex's move depends on the previous labels only: the vertices are split over threads.
+    parallel_ranges(vertex_count, thread_count(threads), [&](size_t begin, size_t end) {
+      std::vector<uint32_t> candidates;
+      for (size_t v = begin; v < end; ++v) {
+        candidates.assign(1, refined.label[v]);
+        for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i) {
+          const uint32_t k = refined.label[adjacency.neighbour[i]];
+          if (std::find(candidates.begin(), candidates.end(), k) == candidates.end()) candidates.push_back(k);
         }
-        return error;
-      };
-      // A vertex moves only for a gain of more than 0.1 %, so the iteration settles.
-      const double own = error_of(candidates[0], INFINITY);
-      double best_error = 0.999 * own;
-      for (size_t j = 1; j < candidates.size(); ++j) {
-        const double error = error_of(candidates[j], best_error);
-        if (error < best_error) best_error = error, label[v] = candidates[j];
+        if (candidates.size() == 1) continue;
+        // Squared prediction error of vertex v under cluster k's transforms, over all frames (stops past limit).
+        auto error_of = [&](uint32_t k, double limit) {
+          double error = 0;
+          const double* c = &motion.centroid[k * 3];
+          const double d[3] = {base[v * 3] - c[0], base[v * 3 + 1] - c[1], base[v * 3 + 2] - c[2]};
+          for (size_t f = 0; f < frames.frame_count && error < limit; ++f) {
+            const double* t = motion.transform(f, k);
+            for (int r = 0; r < 3; ++r) {
+              const double e = t[r * 4] * d[0] + t[r * 4 + 1] * d[1] + t[r * 4 + 2] * d[2] + t[r * 4 + 3] -
+                               frames.frame(f)[v * 3 + size_t(r)];
+              error += e * e;
+            }
+          }
+          return error;
+        };
+        // A vertex moves only for a gain of more than 0.1 %, so the iteration settles.
+        const double own = error_of(candidates[0], INFINITY);
+        double best_error = 0.999 * own;
+        for (size_t j = 1; j < candidates.size(); ++j) {
+          const double error = error_of(candidates[j], best_error);
+          if (error < best_error) best_error = error, label[v] = candidates[j];
+        }
       }
-      moved += label[v] != refined.label[v];
-    }
+    });
+    const bool moved = label != refined.label;
     // Clusters emptied by the moves disappear; labels are renumbered in order of first appearance.
     refined = compact(label);
-    if (moved == 0) break;
+    if (!moved) break;
   }
   if (iterations_out) *iterations_out = iterations;
   return refined;

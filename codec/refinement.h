@@ -34,7 +34,9 @@ MorseBands refine_levels(const std::vector<double>& mu, const std::vector<double
 
 // Motion-driven refinement: at most `max_iterations` rounds of moving each boundary vertex to the adjacent
 // cluster whose transforms predict it best (refitting the transforms after each round).
+// The vertices are weighed on up to `threads` threads (0: every hardware thread), with the same result for any number.
 Clusters refine_by_motion(const Clusters& clusters, const float* base, const Trajectories& frames,
-                          const VertexAdjacency& adjacency, int max_iterations, int* iterations = nullptr);
+                          const VertexAdjacency& adjacency, int max_iterations, int* iterations = nullptr,
+                          size_t threads = 1);
 
 }  // namespace segmorph

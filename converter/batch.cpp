@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <map>
 #include <system_error>
+#include <thread>
 
 #include "segmorph/segmorph.h"
 
@@ -123,6 +124,9 @@ int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, i
         one.output = files[child.file].output;
         one.output_directory.clear();
         one.label = files[child.file].input;
+        // The cores are shared by the files running at once (unless --threads says otherwise).
+        if (one.encode.threads == 0)
+          one.encode.threads = std::max<size_t>(1, std::thread::hardware_concurrency() / jobs);
         sigaction(SIGINT, &previous_interrupt, nullptr);
         sigaction(SIGTERM, &previous_terminate, nullptr);
         const int code = single(one);

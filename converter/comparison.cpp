@@ -7,6 +7,7 @@
 
 #include "bake.h"
 #include "correspondence.h"
+#include "parallel.h"
 
 namespace segmorph {
 namespace {
@@ -146,100 +147,143 @@ Status nearest_counterparts(const tinygltf::Model& other_model, const Scene& oth
 
 }  // namespace
 
+namespace {
+
+// What every reference node's comparison reads.
+struct ComparisonInputs {
+  const tinygltf::Model& reference_model;
+  const Scene& reference_scene;
+  const tinygltf::Model& other_model;
+  const Scene& other_scene;
+  std::vector<Eigen::Matrix4d> reference_global, other_global;
+  std::vector<AnimatedNode> other_nodes;
+  bool encoded_from_reference;
+  const VertexMatches* matches;  // read only while nodes are compared
+};
+
+// One reference node compared: its primitives' comparisons, and the vertex pairings it made that `matches` lacked.
+struct NodeComparison {
+  Status status;
+  std::vector<PrimitiveComparison> primitives;
+  std::vector<std::pair<std::pair<int, size_t>, std::vector<uint32_t>>> new_matches;
+};
+
+void compare_node(const ComparisonInputs& in, const SampledNode& want, NodeComparison& out) {
+  const AnimatedNode& node = *want.node;
+  const std::string label = node_name(in.reference_model, node.node);
+  auto fail = [&](Status status) { out.status = std::move(status); };
+  // The other's animations for the reference's clips, sampled at the reference's times.
+  std::vector<int> clips;
+  std::vector<std::vector<float>> times;
+  for (size_t c = 0; c < node.clips.size(); ++c) {
+    const int clip = counterpart_clip(in.reference_scene, node.clips[c], in.other_scene);
+    if (clip < 0)
+      return fail(
+          Status(StatusCode::bad_data,
+                 "has no animation \"" + in.reference_scene.clips[size_t(node.clips[c])].name + "\" for " + label));
+    clips.push_back(clip);
+    times.push_back(want.primitives[0].clips[c].times);
+  }
+  const Eigen::Matrix4d reference_to_model = sampling_to_model(node, in.reference_global);
+  auto to_reference = [&](const AnimatedNode& other) {
+    const Eigen::Matrix4d other_to_model = sampling_to_model(other, in.other_global);
+    return other_to_model == reference_to_model ? Eigen::Matrix4d::Identity().eval()
+                                                : (reference_to_model.inverse() * other_to_model).eval();
+  };
+
+  // Each primitive's counterpart (node, primitive): the baked node's, the same node in segmorph's own encode,
+  // else the nearest (nearest_counterparts).
+  std::vector<std::pair<const AnimatedNode*, size_t>> pairs(want.primitives.size(), {nullptr, 0});
+  const auto same_node = std::find_if(in.other_nodes.begin(), in.other_nodes.end(),
+                                      [&](const AnimatedNode& other) { return other.node == node.node; });
+  if (const AnimatedNode* baked = baked_from(node.node, in.other_model, in.other_nodes)) {
+    if (in.other_model.meshes[size_t(baked->mesh)].primitives.size() != want.primitives.size())
+      return fail(Status(StatusCode::bad_data, label + ": the primitives differ"));
+    for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {baked, p};
+  } else if (in.encoded_from_reference && same_node != in.other_nodes.end() &&
+             in.other_model.meshes[size_t(same_node->mesh)].primitives.size() == want.primitives.size()) {
+    for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {&*same_node, p};
+  } else {
+    const Status found =
+        nearest_counterparts(in.other_model, in.other_scene, in.other_nodes, want, clips, times, to_reference, pairs);
+    if (!found.ok()) return fail(found);
+  }
+
+  std::map<const AnimatedNode*, Counterpart> sampled;  // every frame of each node paired with
+  for (size_t p = 0; p < want.primitives.size(); ++p) {
+    if (!pairs[p].first) return fail(Status(StatusCode::bad_data, "has no vertices for " + label));
+    auto it = sampled.find(pairs[p].first);
+    if (it == sampled.end()) {
+      it = sampled.emplace(pairs[p].first, Counterpart()).first;
+      const Status counterpart = sample_counterpart(in.other_model, in.other_scene, *pairs[p].first, clips, times,
+                                                    to_reference(*pairs[p].first), it->second);
+      if (!counterpart.ok()) return fail(counterpart);
+    }
+    const std::vector<FrameSequence>& a = want.primitives[p].clips;
+    const std::vector<FrameSequence>& b = it->second.sampled.primitives[pairs[p].second].clips;
+    if (b[0].vertex_count == 0) return fail(Status(StatusCode::bad_data, "has no vertices for " + label));
+
+    // The other's vertices in the reference's order.
+    const std::vector<uint32_t>* match = nullptr;
+    if (in.matches) {
+      const auto found = in.matches->find({node.node, p});
+      if (found != in.matches->end() && found->second.size() == a[0].vertex_count &&
+          std::all_of(found->second.begin(), found->second.end(), [&](uint32_t v) { return v < b[0].vertex_count; }))
+        match = &found->second;
+    }
+    if (!match) {
+      out.new_matches.push_back({{node.node, p}, match_vertices(a, b)});
+      match = &out.new_matches.back().second;
+    }
+    ErrorAccumulator accumulator;
+    for (size_t c = 0; c < a.size(); ++c) {
+      FrameSequence matched = a[c];
+      for (size_t f = 0; f < matched.frame_count; ++f)
+        for (size_t v = 0; v < matched.vertex_count; ++v)
+          for (int k = 0; k < 3; ++k)
+            matched.frame(f)[v * 3 + size_t(k)] = b[c].frame(f)[size_t((*match)[v]) * 3 + size_t(k)];
+      accumulator.add(a[c], matched);
+    }
+    PrimitiveComparison compared;
+    compared.node = node.node, compared.mesh = node.mesh, compared.primitive = int(p);
+    compared.other_node = pairs[p].first->node, compared.other_mesh = pairs[p].first->mesh;
+    compared.other_primitive = int(pairs[p].second);
+    compared.metrics = accumulator.result();
+    out.primitives.push_back(compared);
+  }
+}
+
+}  // namespace
+
 Status compare_animation(const tinygltf::Model& reference_model, const Scene& reference_scene,
                          const std::vector<SampledNode>& reference, const tinygltf::Model& other_model,
                          const Scene& other_scene, AnimationComparison& result, bool encoded_from_reference,
-                         VertexMatches* matches) {
+                         VertexMatches* matches, size_t threads) {
   result = AnimationComparison();
-  std::vector<Eigen::Matrix4d> reference_global, other_global;
-  evaluate_global_transforms(reference_model, reference_scene.graph, nullptr, 0, reference_global);
-  evaluate_global_transforms(other_model, other_scene.graph, nullptr, 0, other_global);
-  const std::vector<AnimatedNode> other_nodes = mesh_nodes(other_model, other_scene);
+  ComparisonInputs in{reference_model,        reference_scene, other_model, other_scene, {}, {}, {},
+                      encoded_from_reference, matches};
+  evaluate_global_transforms(reference_model, reference_scene.graph, nullptr, 0, in.reference_global);
+  evaluate_global_transforms(other_model, other_scene.graph, nullptr, 0, in.other_global);
+  in.other_nodes = mesh_nodes(other_model, other_scene);
 
-  for (const SampledNode& want : reference) {
-    const AnimatedNode& node = *want.node;
-    const std::string label = node_name(reference_model, node.node);
-    // The other's animations for the reference's clips, sampled at the reference's times.
-    std::vector<int> clips;
-    std::vector<std::vector<float>> times;
-    for (size_t c = 0; c < node.clips.size(); ++c) {
-      const int clip = counterpart_clip(reference_scene, node.clips[c], other_scene);
-      if (clip < 0)
-        return Status(StatusCode::bad_data,
-                      "has no animation \"" + reference_scene.clips[size_t(node.clips[c])].name + "\" for " + label);
-      clips.push_back(clip);
-      times.push_back(want.primitives[0].clips[c].times);
-    }
-    const Eigen::Matrix4d reference_to_model = sampling_to_model(node, reference_global);
-    auto to_reference = [&](const AnimatedNode& other) {
-      const Eigen::Matrix4d other_to_model = sampling_to_model(other, other_global);
-      return other_to_model == reference_to_model ? Eigen::Matrix4d::Identity().eval()
-                                                  : (reference_to_model.inverse() * other_to_model).eval();
-    };
-
-    // Each primitive's counterpart (node, primitive): the baked node's, the same node in segmorph's own encode,
-    // else the nearest (nearest_counterparts).
-    std::vector<std::pair<const AnimatedNode*, size_t>> pairs(want.primitives.size(), {nullptr, 0});
-    const auto same_node = std::find_if(other_nodes.begin(), other_nodes.end(),
-                                        [&](const AnimatedNode& other) { return other.node == node.node; });
-    if (const AnimatedNode* baked = baked_from(node.node, other_model, other_nodes)) {
-      if (other_model.meshes[size_t(baked->mesh)].primitives.size() != want.primitives.size())
-        return Status(StatusCode::bad_data, label + ": the primitives differ");
-      for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {baked, p};
-    } else if (encoded_from_reference && same_node != other_nodes.end() &&
-               other_model.meshes[size_t(same_node->mesh)].primitives.size() == want.primitives.size()) {
-      for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {&*same_node, p};
-    } else {
-      SEGMORPH_RETURN_IF_ERROR(
-          nearest_counterparts(other_model, other_scene, other_nodes, want, clips, times, to_reference, pairs));
-    }
-
-    std::map<const AnimatedNode*, Counterpart> sampled;  // every frame of each node paired with
-    for (size_t p = 0; p < want.primitives.size(); ++p) {
-      if (!pairs[p].first) return Status(StatusCode::bad_data, "has no vertices for " + label);
-      auto it = sampled.find(pairs[p].first);
-      if (it == sampled.end()) {
-        it = sampled.emplace(pairs[p].first, Counterpart()).first;
-        SEGMORPH_RETURN_IF_ERROR(sample_counterpart(other_model, other_scene, *pairs[p].first, clips, times,
-                                                    to_reference(*pairs[p].first), it->second));
-      }
-      const std::vector<FrameSequence>& a = want.primitives[p].clips;
-      const std::vector<FrameSequence>& b = it->second.sampled.primitives[pairs[p].second].clips;
-      if (b[0].vertex_count == 0) return Status(StatusCode::bad_data, "has no vertices for " + label);
-
-      // The other's vertices in the reference's order.
-      std::vector<uint32_t> computed;
-      const std::vector<uint32_t>* kept = nullptr;
-      if (matches) {
-        const auto found = matches->find({node.node, p});
-        if (found != matches->end() && found->second.size() == a[0].vertex_count &&
-            std::all_of(found->second.begin(), found->second.end(), [&](uint32_t v) { return v < b[0].vertex_count; }))
-          kept = &found->second;
-      }
-      if (!kept) {
-        computed = match_vertices(a, b);
-        if (matches) kept = &((*matches)[{node.node, p}] = std::move(computed));
-      }
-      const std::vector<uint32_t>& match = kept ? *kept : computed;
-      ErrorAccumulator accumulator;
-      for (size_t c = 0; c < a.size(); ++c) {
-        FrameSequence matched = a[c];
-        for (size_t f = 0; f < matched.frame_count; ++f)
-          for (size_t v = 0; v < matched.vertex_count; ++v)
-            for (int k = 0; k < 3; ++k)
-              matched.frame(f)[v * 3 + size_t(k)] = b[c].frame(f)[size_t(match[v]) * 3 + size_t(k)];
-        accumulator.add(a[c], matched);
-        result.vertex_frames += double(a[c].vertex_count * a[c].frame_count);
-        if (result.vertices == 0) result.frames += a[c].frame_count;  // counted on the first primitive
+  // The nodes are compared on up to `threads` threads; their results are gathered in node order.
+  std::vector<NodeComparison> nodes(reference.size());
+  parallel_ranges(reference.size(), thread_count(threads), [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) compare_node(in, reference[i], nodes[i]);
+  });
+  for (size_t i = 0; i < reference.size(); ++i) {
+    if (!nodes[i].status.ok()) return nodes[i].status;
+    if (matches)
+      for (auto& [key, match] : nodes[i].new_matches) (*matches)[key] = std::move(match);
+    for (size_t p = 0; p < nodes[i].primitives.size(); ++p) {
+      const std::vector<FrameSequence>& a = reference[i].primitives[p].clips;
+      for (const FrameSequence& clip : a) {
+        result.vertex_frames += double(clip.vertex_count * clip.frame_count);
+        if (result.vertices == 0) result.frames += clip.frame_count;  // counted on the first primitive
       }
       result.vertices += a[0].vertex_count;
-      const ErrorMetrics metrics = accumulator.result();
-      PrimitiveComparison compared;
-      compared.node = node.node, compared.mesh = node.mesh, compared.primitive = int(p);
-      compared.other_node = pairs[p].first->node, compared.other_mesh = pairs[p].first->mesh;
-      compared.other_primitive = int(pairs[p].second);
-      compared.metrics = metrics;
-      result.primitives.push_back(compared);
+      const ErrorMetrics& metrics = nodes[i].primitives[p].metrics;
+      result.primitives.push_back(nodes[i].primitives[p]);
       result.worst.kg_percent = std::max(result.worst.kg_percent, metrics.kg_percent);
       result.worst.rmse_over_diagonal = std::max(result.worst.rmse_over_diagonal, metrics.rmse_over_diagonal);
       result.worst.max_error_over_diagonal =

@@ -47,11 +47,12 @@ struct AnimationComparison {
 // `encoded_from_reference`: `other` is segmorph's encode of the reference (decoded), whose nodes keep their indices:
 // a node that was not baked is paired with the node of the same index, without the search by trajectory.
 // `matches`, when given, keeps each primitive's vertex pairing (by reference node and primitive) from one call to
-// the next: a search that compares encodes differing only in their tracks pairs the vertices once.
+// the next: a search that compares encodes differing only in their tracks pairs the vertices once. The reference's
+// nodes are compared on up to `threads` threads (0: every hardware thread), with the same result for any number.
 using VertexMatches = std::map<std::pair<int, size_t>, std::vector<uint32_t>>;
 Status compare_animation(const tinygltf::Model& reference_model, const Scene& reference_scene,
                          const std::vector<SampledNode>& reference, const tinygltf::Model& other_model,
                          const Scene& other_scene, AnimationComparison& result, bool encoded_from_reference = false,
-                         VertexMatches* matches = nullptr);
+                         VertexMatches* matches = nullptr, size_t threads = 1);
 
 }  // namespace segmorph

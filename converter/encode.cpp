@@ -187,13 +187,14 @@ size_t coded_bytes(const tinygltf::Model& model, int mesh, int primitive) {
 
 // The report's primitives and errors, measured as verify measures them: the encode decoded and compared with the
 // input's sampled frames.
-Status measure(const SampledFile& file, const Encoded& encoded, EncodeReport& report) {
+Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, EncodeReport& report) {
   const auto begin = std::chrono::steady_clock::now();
   SampledFile decoded;
   AnimationComparison comparison;
   Status status = analyze_model(encoded.model, SampleSettings(), false, {}, decoded);
   if (status.ok())
-    status = compare_animation(file.model, file.scene, file.sampled, decoded.model, decoded.scene, comparison, true);
+    status = compare_animation(file.model, file.scene, file.sampled, decoded.model, decoded.scene, comparison, true,
+                               nullptr, threads);
   if (!status.ok()) return Status(StatusCode::internal, "measuring the encode against the input: " + status.message());
   for (const PrimitiveComparison& compared : comparison.primitives) {
     EncodedPrimitive primitive;
@@ -241,6 +242,7 @@ Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, t
   choices.codec.target = settings.target;
   choices.codec.clusters = settings.clusters;
   choices.codec.table_residuals = settings.fast_decode;
+  choices.codec.threads = settings.threads;
   choices.draco.position_bits = settings.position_bits;
   choices.draco.normal_bits = settings.normal_bits;
   choices.draco.texcoord_bits = settings.texcoord_bits;
@@ -290,7 +292,7 @@ Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, t
     }
   report = EncodeReport();
   report_progress(progress, "measuring the encode against the input");
-  SEGMORPH_RETURN_IF_ERROR(measure(file, encoded, report));
+  SEGMORPH_RETURN_IF_ERROR(measure(file, encoded, settings.threads, report));
   report.glb_bytes = glb_size(encoded.model);
   report.ms_tracks = encoded.ms_tracks;
   output = std::move(encoded.model);

@@ -56,13 +56,13 @@ std::vector<SampledNode> thinned(const std::vector<SampledNode>& sampled) {
 // The worst KG error (%) of `encoded` against `reference`, frames of the file it was encoded from, as verify
 // measures it.
 Status measured_kg(const SampledFile& file, const std::vector<SampledNode>& reference, tinygltf::Model&& encoded,
-                   VertexMatches& matches, double& kg) {
+                   VertexMatches& matches, size_t threads, double& kg) {
   SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(encoded));
   Scene scene;
   SEGMORPH_RETURN_IF_ERROR(analyze_scene(encoded, scene));
   AnimationComparison comparison;
   SEGMORPH_RETURN_IF_ERROR(
-      compare_animation(file.model, file.scene, reference, encoded, scene, comparison, true, &matches));
+      compare_animation(file.model, file.scene, reference, encoded, scene, comparison, true, &matches, threads));
   kg = comparison.worst.kg_percent;
   return Status::Ok();
 }
@@ -96,7 +96,7 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
     candidate = model;
     SEGMORPH_RETURN_IF_ERROR(encode(distance, candidate));
     SEGMORPH_RETURN_IF_ERROR(
-        measured_kg(file, every_frame ? file.sampled : subsample, std::move(candidate), matches, kg));
+        measured_kg(file, every_frame ? file.sampled : subsample, std::move(candidate), matches, codec.threads, kg));
     ok = kg <= goal;
     char line[160];
     std::snprintf(line, sizeof(line), "kept skins: tracks within %.4g: KG %.4f %% (%s, measurement %d)", distance,

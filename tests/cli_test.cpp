@@ -186,7 +186,8 @@ TEST(Cli, HelpStatesEveryRangeTheToolHolds) {
       EXPECT_EQ(run(files + " -q " + option + " " + text).exit_code, code) << entry << "\n  value " << text;
     }
   }
-  EXPECT_EQ(ranges, 10) << help;  // --fps, --error, --bpvf, --clusters, the Draco precisions, verify's bounds, --jobs
+  EXPECT_EQ(ranges, 11) << help;  // --fps, --error, --bpvf, --clusters, the Draco precisions, verify's bounds, --jobs,
+                                 // --threads
   EXPECT_FALSE(fs::exists(output));
   fs::remove_all(output + ".d");  // the batch's folder (its one file was missing)
 }

@@ -2,7 +2,11 @@
 // target, decode, verify, save; errors as a Status.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "segmorph/segmorph.h"
 #include "test_files.h"
@@ -57,6 +61,51 @@ TEST(Pipeline, EncodeDecodeAndVerifyAFile) {
   VerifyReport again;
   ASSERT_TRUE(verify(original, read, SampleSettings(), again).ok());
   EXPECT_DOUBLE_EQ(again.kg_percent, measured.kg_percent);
+}
+
+// The bytes of `path` (a file the test wrote).
+std::string bytes_of(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+}
+
+// The encode is the same bytes at every thread count: lossy (with its rate control's measurements split over
+// threads), at a bpvf target, and lossless, on two bundled morph files and a skinned one (its kept skin's search
+// measures on threads); at an error target on the cow and RobotExpressive when ../shared is present.
+TEST(Pipeline, EncodesAreTheSameBytesForEveryThreadCount) {
+  std::vector<std::string> files = {sample("AnimatedMorphCube/AnimatedMorphCube.glb"),
+                                    sample("WavingFlag/flag.glb"), sample("Fox/Fox.glb")};
+  // From ../shared, at an error target only: the cow (long), RobotExpressive (kept skins, measured on many nodes).
+  const std::string shared = SEGMORPH_SHARED_SAMPLES_DIR;
+  const std::vector<std::string> long_ones = {shared + "/sequences/Cow_pcow/cow.glb",
+                                              shared + "/gltf/RobotExpressive/RobotExpressive.glb"};
+  for (const std::string& file : long_ones)
+    if (std::filesystem::exists(file)) files.push_back(file);
+    else std::printf("../shared/samples is absent: %s is not encoded\n", file.c_str());
+  for (const std::string& file : files) {
+    Model original;
+    ASSERT_TRUE(Model::load(file, original).ok()) << file;
+    const bool long_one = std::find(long_ones.begin(), long_ones.end(), file) != long_ones.end();
+    for (RateMode mode : {RateMode::error, RateMode::bpvf, RateMode::lossless}) {
+      if (long_one && mode != RateMode::error) continue;
+      std::string first;
+      for (size_t threads : {1, 2, 4}) {
+        SCOPED_TRACE(file + ", mode " + std::to_string(int(mode)) + ", " + std::to_string(threads) + " threads");
+        EncodeSettings settings;
+        settings.mode = mode;
+        settings.target = mode == RateMode::bpvf ? 20 : 0.15;
+        settings.targets = EncodeSettings::Targets::bake;
+        settings.threads = threads;
+        Model encoded;
+        ASSERT_TRUE(encode(original, settings, encoded).ok());
+        const std::string path = testing::temporary_path("threads.glb");
+        ASSERT_TRUE(encoded.save(path).ok());
+        const std::string bytes = bytes_of(path);
+        if (threads == 1) first = bytes;
+        else EXPECT_TRUE(bytes == first) << "the encode differs from the one-thread encode";
+      }
+    }
+  }
 }
 
 TEST(Pipeline, BakeWritesMorphTargets) {

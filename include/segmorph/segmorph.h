@@ -166,6 +166,9 @@ struct EncodeSettings {
   enum class Targets { automatic, keep, bake } targets = Targets::automatic;
   // The residuals in the table code of stream version 2: faster decoding, larger files. Lossy encodes only.
   bool fast_decode = false;
+  // Threads for the stages that split their work (the residual steps' measurement of rate control, the predictions);
+  // 0: every hardware thread. The output is the same bytes for every number.
+  size_t threads = 0;
 };
 
 // One animation stream of a primitive coded as frames or kept targets, as the codec made it.

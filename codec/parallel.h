@@ -1,0 +1,49 @@
+// Work split over threads for the encoder's stages (never the decoder's: the runtime decoder stays single-threaded
+// and dependency-free). Each call runs contiguous ranges of its items on up to `threads` threads and returns when
+// all are done; the ranges, and so whatever the body computes per item, do not depend on the thread count. Callers
+// keep results per item (or per range in range order), so the output is the same bytes for every thread count.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <exception>
+#include <thread>
+#include <vector>
+
+namespace segmorph {
+
+// Threads for a setting: 0 means every hardware thread; at least 1.
+inline size_t thread_count(size_t requested) {
+  if (requested > 0) return requested;
+  const unsigned hardware = std::thread::hardware_concurrency();
+  return hardware > 0 ? hardware : 1;
+}
+
+// Calls body(begin, end) for consecutive ranges covering [0, count), each on a thread of its own (the first on the
+// calling thread); at most `threads` ranges, of near-equal size. An exception in a range is rethrown here after every
+// thread has finished (the first range's first).
+template <typename Body>
+void parallel_ranges(size_t count, size_t threads, Body&& body) {
+  const size_t ranges = std::min(std::max<size_t>(threads, 1), count);
+  if (ranges <= 1) {
+    if (count > 0) body(size_t(0), count);
+    return;
+  }
+  std::vector<std::exception_ptr> errors(ranges);
+  auto run = [&](size_t r) {
+    try {
+      body(count * r / ranges, count * (r + 1) / ranges);
+    } catch (...) {
+      errors[r] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> workers;
+  workers.reserve(ranges - 1);
+  for (size_t r = 1; r < ranges; ++r) workers.emplace_back(run, r);
+  run(0);
+  for (std::thread& worker : workers) worker.join();
+  for (const std::exception_ptr& error : errors)
+    if (error) std::rethrow_exception(error);
+}
+
+}  // namespace segmorph
