@@ -1,6 +1,7 @@
 #include "bake.h"
 
 #include <cmath>
+#include <functional>
 #include <map>
 
 #include "accessor.h"
@@ -242,7 +243,7 @@ tinygltf::AnimationChannel clip_channel(tinygltf::Animation& animation, const Sa
 
 // Each animation: the weights channels of baked nodes and the channels of joints that matter to nothing go; each
 // clip of a baked node becomes a weights channel on its host.
-void rebuild_channels(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled,
+void rebuild_channels(tinygltf::Model& model, const Scene& scene, const std::vector<const SampledNode*>& sampled,
                       const Baked& baked, AccessorWriter& writer) {
   std::vector<bool> baked_joint;
   const std::vector<bool> needed = needed_nodes(model, baked.skin, baked_joint);
@@ -257,31 +258,64 @@ void rebuild_channels(tinygltf::Model& model, const Scene& scene, const std::vec
       channels.push_back(channel);
     }
     for (size_t i = 0; i < sampled.size(); ++i) {
-      const AnimatedNode& node = *sampled[i].node;
+      const AnimatedNode& node = *sampled[i]->node;
       for (size_t c = 0; c < node.clips.size(); ++c) {
         if (size_t(scene.clips[size_t(node.clips[c])].animation) != a) continue;
         if (baked.target_count[i] == 0) continue;  // a single frame: nothing to play
         channels.push_back(
-            clip_channel(animation, sampled[i], c, baked.target_count[i], baked.host[size_t(node.node)], writer));
+            clip_channel(animation, *sampled[i], c, baked.target_count[i], baked.host[size_t(node.node)], writer));
       }
     }
     animation.channels = std::move(channels);
   }
 }
 
-}  // namespace
-
-Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled) {
+// Bakes `count` nodes, node i given by next(i, node) just before it is baked and left to done(i) after; the channels
+// read only the nodes' clip times and frame counts.
+Status bake_nodes(tinygltf::Model& model, const Scene& scene, size_t count,
+                  const std::function<Status(size_t i, const SampledNode*& node)>& next,
+                  const std::function<void(size_t i)>& done) {
   SEGMORPH_RETURN_IF_ERROR(check_references(model));
   AccessorWriter writer(model);
   const std::vector<std::vector<bool>> members = scene_members(model);
   Baked baked;
   baked.host.assign(model.nodes.size(), -1);
   baked.skin.assign(model.skins.size(), false);
-  baked.target_count.assign(sampled.size(), 0);
-  for (size_t i = 0; i < sampled.size(); ++i) bake_node(model, scene, sampled[i], i, members, writer, baked);
+  baked.target_count.assign(count, 0);
+  std::vector<const SampledNode*> sampled(count, nullptr);
+  for (size_t i = 0; i < count; ++i) {
+    SEGMORPH_RETURN_IF_ERROR(next(i, sampled[i]));
+    bake_node(model, scene, *sampled[i], i, members, writer, baked);
+    if (done) done(i);
+  }
   rebuild_channels(model, scene, sampled, baked, writer);
   return Status::Ok();
+}
+
+}  // namespace
+
+Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled) {
+  return bake_nodes(
+      model, scene, sampled.size(),
+      [&](size_t i, const SampledNode*& node) {
+        node = &sampled[i];
+        return Status::Ok();
+      },
+      {});
+}
+
+Status bake_model(tinygltf::Model& model, const Scene& scene, const NodeSampler& sample) {
+  std::vector<SampledNode> nodes(scene.animated.size());
+  return bake_nodes(
+      model, scene, nodes.size(),
+      [&](size_t i, const SampledNode*& node) {
+        node = &nodes[i];
+        return sample(i, nodes[i]);
+      },
+      [&](size_t i) {  // the frames go; the clips' times and frame counts stay for the channels
+        for (SampledPrimitive& primitive : nodes[i].primitives)
+          for (FrameSequence& clip : primitive.clips) std::vector<float>().swap(clip.positions);
+      });
 }
 
 }  // namespace segmorph

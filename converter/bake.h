@@ -31,6 +31,12 @@ namespace segmorph {
 // scene.animated, in that order.
 Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled);
 
+// The same bake, sampling one node at a time: sample(i, node) fills node i of scene.animated (from `model` as it is
+// then: the nodes before it baked, its own data untouched) just before it is baked, and its frames are released
+// after, so that the frames of one node are held at a time rather than the whole file's.
+using NodeSampler = std::function<Status(size_t i, SampledNode& node)>;
+Status bake_model(tinygltf::Model& model, const Scene& scene, const NodeSampler& sample);
+
 // The index, in the file it was baked from, of a node bake_model wrote (extras.segmorph.source_node), or -1.
 int source_node(const tinygltf::Node& node);
 

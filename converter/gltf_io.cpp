@@ -330,7 +330,47 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
   return Status::Ok();
 }
 
-void repack(tinygltf::Model& model) {
+namespace {
+
+// repack's packing without a second buffer, where it can: every kept view (model.bufferViews, where its bytes are)
+// in buffer 0, in increasing order without overlap (as the loader and AccessorWriter leave them), and none's packed
+// place after its present one: each moves down to its place in order, the gaps zeroed: the bytes the copy writes, with
+// no copy of a file-sized buffer. False, with nothing changed, when the views are otherwise.
+bool pack_in_place(tinygltf::Model& model, const std::vector<tinygltf::BufferView>& packed) {
+  if (model.buffers.empty()) return false;
+  std::vector<unsigned char>& data = model.buffers[0].data;
+  size_t source_end = 0;
+  for (size_t i = 0; i < packed.size(); ++i) {
+    const tinygltf::BufferView& view = model.bufferViews[i];
+    if (view.buffer != 0 || view.byteOffset < source_end || view.byteOffset < packed[i].byteOffset ||
+        view.byteOffset + view.byteLength > data.size())
+      return false;
+    source_end = view.byteOffset + view.byteLength;
+  }
+  size_t end = 0;
+  for (size_t i = 0; i < packed.size(); ++i) {
+    const tinygltf::BufferView& view = model.bufferViews[i];
+    std::fill(data.begin() + long(end), data.begin() + long(packed[i].byteOffset), 0);
+    if (view.byteLength > 0) std::memmove(data.data() + packed[i].byteOffset, data.data() + view.byteOffset, view.byteLength);
+    end = packed[i].byteOffset + view.byteLength;
+  }
+  data.resize(packed.empty() ? 0 : (end + 3) / 4 * 4);
+  std::fill(data.begin() + long(std::min(end, data.size())), data.end(), 0);
+  tinygltf::Buffer buffer;
+  buffer.data.swap(data);
+  model.buffers.clear();
+  if (!buffer.data.empty()) model.buffers.push_back(std::move(buffer));
+  return true;
+}
+
+}  // namespace
+
+namespace {
+
+// Everything repack does but moving bytes: what nothing refers to goes (meshes, skins, samplers, accessors,
+// bufferViews), images given by URI move into bufferViews (of buffers of their own), and the kept bufferViews are
+// renumbered where they lie. Returns them at their places in the one buffer repack packs.
+std::vector<tinygltf::BufferView> prune(tinygltf::Model& model) {
   // Meshes and skins in use.
   Remap meshes(model.meshes.size()), skins(model.skins.size());
   for (const tinygltf::Node& node : model.nodes) {
@@ -372,7 +412,6 @@ void repack(tinygltf::Model& model) {
   model.accessors = select(model.accessors, accessors);
 
   // Images given by URI (data: or a file) move into bufferViews, so the output is self-contained.
-  tinygltf::Buffer packed;
   std::vector<tinygltf::BufferView> image_views;  // appended after the kept views
   for (tinygltf::Image& image : model.images) {
     if (image.bufferView < 0 && !image.image.empty()) {
@@ -395,7 +434,7 @@ void repack(tinygltf::Model& model) {
   }
   model.bufferViews.insert(model.bufferViews.end(), image_views.begin(), image_views.end());
 
-  // BufferViews in use, copied into one buffer.
+  // BufferViews in use.
   Remap views(model.bufferViews.size());
   for (const tinygltf::Accessor& accessor : model.accessors) {
     views.keep(accessor.bufferView);
@@ -417,20 +456,55 @@ void repack(tinygltf::Model& model) {
   }
   for (tinygltf::Image& image : model.images) image.bufferView = views(image.bufferView);
 
-  std::vector<tinygltf::BufferView> kept_views = select(model.bufferViews, views);
-  for (tinygltf::BufferView& view : kept_views) {
-    const std::vector<unsigned char>& source = model.buffers[size_t(view.buffer)].data;
-    packed.data.resize((packed.data.size() + 3) / 4 * 4, 0);
-    const size_t offset = packed.data.size();
-    packed.data.insert(packed.data.end(), source.begin() + long(view.byteOffset),
-                       source.begin() + long(view.byteOffset + view.byteLength));
+  model.bufferViews = select(model.bufferViews, views);
+  // Their places in the one buffer: in order, each at a multiple of 4.
+  std::vector<tinygltf::BufferView> packed = model.bufferViews;
+  size_t end = 0;
+  for (tinygltf::BufferView& view : packed) {
     view.buffer = 0;
-    view.byteOffset = offset;
+    view.byteOffset = (end + 3) / 4 * 4;
+    end = view.byteOffset + view.byteLength;
   }
-  packed.data.resize((packed.data.size() + 3) / 4 * 4, 0);
-  model.bufferViews = std::move(kept_views);
+  return packed;
+}
+
+// The packed buffer's bytes (a multiple of 4) for views at their packed places.
+size_t packed_size(const std::vector<tinygltf::BufferView>& packed) {
+  return packed.empty() ? 0 : (packed.back().byteOffset + packed.back().byteLength + 3) / 4 * 4;
+}
+
+// Calls write(bytes, count) with the packed buffer's bytes, in order: each view's bytes from where `model`'s views
+// hold them now, zeros before it up to its packed place and at the end.
+template <typename Write>
+void for_each_packed_byte_run(const tinygltf::Model& model, const std::vector<tinygltf::BufferView>& packed,
+                              Write write) {
+  static const unsigned char zeros[4] = {0, 0, 0, 0};
+  size_t end = 0;
+  for (size_t i = 0; i < packed.size(); ++i) {
+    const tinygltf::BufferView& source = model.bufferViews[i];
+    write(zeros, packed[i].byteOffset - end);
+    write(model.buffers[size_t(source.buffer)].data.data() + source.byteOffset, source.byteLength);
+    end = packed[i].byteOffset + packed[i].byteLength;
+  }
+  write(zeros, packed_size(packed) - end);
+}
+
+}  // namespace
+
+void repack(tinygltf::Model& model) {
+  std::vector<tinygltf::BufferView> packed = prune(model);
+  if (pack_in_place(model, packed)) {
+    model.bufferViews = std::move(packed);
+    return;
+  }
+  tinygltf::Buffer buffer;
+  buffer.data.reserve(packed_size(packed));  // grows once
+  for_each_packed_byte_run(model, packed, [&](const unsigned char* bytes, size_t count) {
+    buffer.data.insert(buffer.data.end(), bytes, bytes + count);
+  });
+  model.bufferViews = std::move(packed);
   model.buffers.clear();
-  if (!packed.data.empty()) model.buffers.push_back(std::move(packed));
+  if (!buffer.data.empty()) model.buffers.push_back(std::move(buffer));
 }
 
 void name_generator(tinygltf::Model& model) {
@@ -483,21 +557,47 @@ void name_empty_objects(tinygltf::Model& model) {
   }
 }
 
-// The JSON of a .gltf whose one buffer (repack's) is the file `bin_name` beside it, as tinygltf writes it (sorted
-// keys, two spaces, a final newline). The buffer's bytes stay out of the JSON text: tinygltf would otherwise
-// write them as a data URI.
-std::string gltf_json(tinygltf::Model& model, tinygltf::TinyGLTF& writer, const std::string& bin_name) {
-  std::vector<unsigned char> data;
-  if (!model.buffers.empty()) data.swap(model.buffers[0].data);
+// The JSON of the model to write: `model` with its views at their `packed` places and one buffer of their size, as
+// tinygltf writes it: for a .glb compact, with the buffer's byteLength only; for a .gltf (`bin_name` not empty) with
+// sorted keys, two spaces and a final newline, and the buffer the file `bin_name` beside it. The buffers' bytes stay
+// where they are: they are written from there, after the JSON.
+std::string packed_json(tinygltf::Model& model, const std::vector<tinygltf::BufferView>& packed,
+                        tinygltf::TinyGLTF& writer, const std::string& bin_name) {
+  const size_t size = packed_size(packed);
+  std::vector<tinygltf::Buffer> buffers;
+  buffers.swap(model.buffers);
+  std::vector<tinygltf::BufferView> sources = packed;
+  sources.swap(model.bufferViews);
+  if (size > 0) model.buffers.resize(1);
   std::ostringstream text;
-  writer.WriteGltfSceneToStream(&model, text, true, false);
-  if (model.buffers.empty()) return text.str();
-  const size_t size = data.size();
-  model.buffers[0].data.swap(data);
+  writer.WriteGltfSceneToStream(&model, text, !bin_name.empty(), bin_name.empty());
+  model.buffers.swap(buffers);
+  model.bufferViews.swap(sources);
+  if (bin_name.empty()) {
+    // tinygltf wrote a .glb of an empty buffer: its JSON chunk, the buffer's byteLength set.
+    const std::string glb = text.str();
+    uint32_t length = 0;
+    std::memcpy(&length, glb.data() + 12, 4);
+    std::string json = glb.substr(20, length);
+    json.erase(json.find_last_not_of(' ') + 1);
+    if (size > 0) {
+      const std::string empty = "\"buffers\":[{\"byteLength\":0}]";
+      const size_t at = json.find(empty);
+      if (at == std::string::npos || json.find(empty, at + 1) != std::string::npos) return std::string();
+      json.replace(at, empty.size(), "\"buffers\":[{\"byteLength\":" + std::to_string(size) + "}]");
+    }
+    return json;
+  }
+  if (size == 0) return text.str();
   nlohmann::json json = nlohmann::json::parse(text.str());
   json["buffers"][0]["byteLength"] = size;
   json["buffers"][0]["uri"] = bin_name;
   return json.dump(2) + "\n";
+}
+
+void write_le32(std::ostream& out, uint32_t value) {
+  const unsigned char bytes[4] = {uint8_t(value), uint8_t(value >> 8), uint8_t(value >> 16), uint8_t(value >> 24)};
+  out.write(reinterpret_cast<const char*>(bytes), 4);
 }
 
 }  // namespace
@@ -506,16 +606,39 @@ Status save_gltf(tinygltf::Model& model, const std::string& path) {
   const bool binary = ends_with(path, ".glb") || path == "-";  // the standard output takes a .glb
   if (!binary && !ends_with(path, ".gltf"))
     return Status(StatusCode::invalid_argument, "output must end in .glb or .gltf");
-  repack(model);
+  const std::vector<tinygltf::BufferView> packed = prune(model);
   shorten_float_numbers(model);
   name_empty_objects(model);
   tinygltf::TinyGLTF writer;
   writer.SetImageWriter(write_no_image, nullptr);
+  const size_t size = packed_size(packed);
+  auto write_bin = [&](std::ostream& out) {
+    for_each_packed_byte_run(model, packed, [&](const unsigned char* bytes, size_t count) {
+      out.write(reinterpret_cast<const char*>(bytes), std::streamsize(count));
+    });
+  };
 
   OutputFile file, bin;
   SEGMORPH_RETURN_IF_ERROR(file.open(path));
   if (binary) {
-    writer.WriteGltfSceneToStream(&model, file.stream(), false, true);
+    // The .glb container (header, JSON chunk padded with spaces, BIN chunk), its BIN written view by view.
+    std::string json = packed_json(model, packed, writer, "");
+    if (json.empty()) return Status(StatusCode::internal, "the glTF writer's JSON has no buffer to size");
+    json.append((4 - json.size() % 4) % 4, ' ');
+    if (json.size() + size + 28 > UINT32_MAX)
+      return Status(StatusCode::unsupported, "larger than 4 GiB, which a .glb cannot hold");
+    std::ostream& out = file.stream();
+    out.write("glTF", 4);
+    write_le32(out, 2);
+    write_le32(out, uint32_t(12 + 8 + json.size() + (size > 0 ? 8 + size : 0)));
+    write_le32(out, uint32_t(json.size()));
+    write_le32(out, 0x4E4F534A);  // JSON
+    out << json;
+    if (size > 0) {
+      write_le32(out, uint32_t(size));
+      write_le32(out, 0x004E4942);  // BIN
+      write_bin(out);
+    }
     SEGMORPH_RETURN_IF_ERROR(file.finish());
     return file.commit();
   }
@@ -523,12 +646,11 @@ Status save_gltf(tinygltf::Model& model, const std::string& path) {
   const size_t slash = path.find_last_of('/');
   const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
   const std::string bin_name = name.substr(0, name.find_last_of('.')) + ".bin";
-  file.stream() << gltf_json(model, writer, bin_name);
+  file.stream() << packed_json(model, packed, writer, bin_name);
   SEGMORPH_RETURN_IF_ERROR(file.finish());
-  if (model.buffers.empty()) return file.commit();
+  if (size == 0) return file.commit();
   SEGMORPH_RETURN_IF_ERROR(bin.open(path.substr(0, path.size() - name.size()) + bin_name));
-  bin.stream().write(reinterpret_cast<const char*>(model.buffers[0].data.data()),
-                     std::streamsize(model.buffers[0].data.size()));
+  write_bin(bin.stream());
   SEGMORPH_RETURN_IF_ERROR(bin.finish());
   return OutputFile::commit(bin, file);
 }

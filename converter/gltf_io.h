@@ -17,12 +17,16 @@ namespace segmorph {
 Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<std::string>* warnings = nullptr);
 
 // Drops meshes, skins, accessors, bufferViews and animation samplers nothing refers to, and packs all
-// remaining data, embedded images included, into one buffer.
+// remaining data, embedded images included, into one buffer (in place, without a second buffer, when the views
+// already lie in order in the first one).
 void repack(tinygltf::Model& model);
 
-// Repacks `model` and writes it to `path`, binary if it ends in .glb, JSON with a .bin beside it if it ends
-// in .gltf. Numbers glTF defines as floats that hold a float exactly are written in the fewest digits that read
-// back as that float. The files appear whole or not at all (output_file.h): a full disk or a signal leaves nothing.
+// Writes `model` to `path` as repack would pack it, binary if it ends in .glb, JSON with a .bin beside it if it ends
+// in .gltf: what nothing refers to is dropped from `model` (images given by URI move into bufferViews), and the one
+// buffer's bytes are written view by view from where they lie, never copied into a buffer of their own (the model
+// keeps its buffers). Numbers glTF defines as floats that hold a float exactly are written in the fewest digits that
+// read back as that float. The files appear whole or not at all (output_file.h): a full disk or a signal leaves
+// nothing.
 Status save_gltf(tinygltf::Model& model, const std::string& path);
 
 // The bytes save_gltf would write for `model` as a .glb (images that are files included as it embeds them).

@@ -151,15 +151,22 @@ Status info(const Model& model, const SampleSettings& settings, InfoReport& repo
 }
 
 Status bake(Model& model, const SampleSettings& settings, BakeReport* report, const Progress& progress) {
+  // Each node is sampled just before it is baked: the frames of one node are held at a time.
   SampledFile file;
-  SEGMORPH_RETURN_IF_ERROR(analyze_model(model.data().gltf, settings, true, progress, file));
-  SEGMORPH_RETURN_IF_ERROR(bake_model(file.model, file.scene, file.sampled));
-  if (report) {
-    *report = BakeReport();
-    report->nodes = file.sampled.size();
-    for (const SampledNode& node : file.sampled)
-      for (const FrameSequence& clip : node.primitives[0].clips) report->frames += clip.frame_count;
-  }
+  SEGMORPH_RETURN_IF_ERROR(analyze_model(model.data().gltf, settings, false, progress, file));
+  const Scene& scene = file.scene;
+  BakeReport local;
+  BakeReport& out = report ? *report : local;
+  out = BakeReport();
+  out.nodes = scene.animated.size();
+  auto sample = [&](size_t i, SampledNode& node) {
+    report_progress(progress, "sampling and baking " + node_name(file.model, scene.animated[i].node) + " (" +
+                                  std::to_string(i + 1) + "/" + std::to_string(scene.animated.size()) + ")");
+    SEGMORPH_RETURN_IF_ERROR(sample_node(file.model, scene, scene.animated[i], settings, node));
+    for (const FrameSequence& clip : node.primitives[0].clips) out.frames += clip.frame_count;
+    return Status::Ok();
+  };
+  SEGMORPH_RETURN_IF_ERROR(bake_model(file.model, scene, sample));
   name_generator(file.model);
   model.data().gltf = std::move(file.model);
   return Status::Ok();

@@ -47,7 +47,8 @@ class Model {
                            const Progress& progress = {});
 
   // Writes `path`: binary if it ends in .glb, JSON with a .bin beside it if it ends in .gltf, whole or not at all.
-  // The data is repacked into one buffer first (the model changes accordingly).
+  // The file holds one buffer; what nothing refers to is dropped from the model first (the model changes
+  // accordingly), and the buffer's bytes are written from where they are, without a copy of them.
   Status save(const std::string& path);
 
   // The bytes save() would write as a .glb (images that are files included as it embeds them).
