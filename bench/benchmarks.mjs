@@ -28,7 +28,7 @@ import { writeReport } from './lib/report.mjs';
 import { SCALING, measureScaling } from './lib/scaling.mjs';
 import { benchmarkCodec, measureFile } from './lib/speed.mjs';
 import { measureBrowser } from './lib/browser.mjs';
-import { StepError, Tools, gltfFiles, machine, progress, revision } from './lib/tools.mjs';
+import { StepError, Tools, buildSource, gltfFiles, machine, progress, revision } from './lib/tools.mjs';
 import { checkQuick } from './lib/quick_checks.mjs';
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
@@ -85,7 +85,7 @@ function inputs(tools, options) {
 
 function meta(tools, started, load) {
   return {
-    machine: machine(), revision: revision(root), started: started.toISOString().replace(/\.\d+Z$/, 'Z'),
+    machine: machine(), revision: revision(buildSource(tools.build) ?? root), started: started.toISOString().replace(/\.\d+Z$/, 'Z'),
     minutes: (Date.now() - started.getTime()) / 60000, load: [load, os.loadavg()[0]],
     versions: [tools.version('segmorph', ['--version']), tools.version('gltfpack', ['-v']),
                `glTF-Transform ${tools.version('gltf_transform', ['--version'])}`, `Node.js ${process.version}`],

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# segmorph against gltfpack -cc on every animated sample: sizes, KG error, validator results, one table.
+# segmorph against gltfpack -cc and -cz on every animated sample: sizes (raw, after gzip -9 and after brotli -q 11),
+# KG error, validator results, one page of tables.
 #
 #   bench/compare_gltfpack.sh SEGMORPH OUTDIR SAMPLES_DIR [DOC]
 #
@@ -15,9 +16,11 @@
 #
 # Per file: segmorph encode at --error 0.5, --error 0.15 and the default target, decode, verify (KG of the
 # encoded and of the decoded file), the Khronos validator on both; gltfpack 1.3 (tests/js/node_modules)
-# -cc -af 0 at -vp 8 to 16, its meshopt compression undone by tests/js/meshopt_decode.mjs (segmorph does not
-# decode EXT_meshopt_compression), verify. Bytes are those of the files the tools wrote. Needs the Node.js
-# tools of tests/js: npm ci --prefix tests/js (.ci/setup does it).
+# -cc -af 0 and -cz -af 0 at -vp 8 to 16, its meshopt compression undone by tests/js/meshopt_decode.mjs (segmorph
+# decodes neither EXT_meshopt_compression, which -cc writes, nor KHR_meshopt_compression, which -cz writes),
+# verify. Bytes are those of the files the tools wrote: raw here, and after gzip -9 and brotli -q 11 (Debian's
+# gzip and brotli commands) in compare_gltfpack.mjs, whose headline is brotli's. Needs the Node.js tools of
+# tests/js: npm ci --prefix tests/js (.ci/setup does it).
 # Exit status: 0 when every step ran, every KG is within the requested bound and the validator found no
 # error; 1 otherwise (the table says where); 2 on bad usage.
 set -u
@@ -38,12 +41,16 @@ for package in gltfpack three gltf-validator; do
     exit 2
   fi
 done
+for program in gzip brotli; do
+  command -v "$program" >/dev/null || { echo "compare_gltfpack: $program is missing; install it: apt-get install $program" >&2; exit 2; }
+done
 [ -z "$doc" ] || grep -q '^<!-- compare_gltfpack: begin -->$' "$doc" ||
   { echo "compare_gltfpack: $doc has no '<!-- compare_gltfpack: begin -->' line" >&2; exit 2; }
 
 segmorph_settings=("--error 0.5" "--error 0.15" "")  # "" is the default target
 default_error=$("$segmorph" --help | sed -n 's/.*--error E .*(default \([0-9.]*\)).*/\1/p')
 vp_levels=(8 9 10 11 12 13 14 15 16)
+gltfpack_modes=(-cc -cz)  # EXT_meshopt_compression, KHR_meshopt_compression (attribute codec version 1)
 
 inputs=()
 if [ -n "$shared" ] && [ -d "$shared" ]; then
@@ -113,23 +120,29 @@ for input in "${inputs[@]}"; do
     echo "   segmorph ${setting:-default}: ${bytes:-FAILED} bytes"
   done
 
-  for vp in "${vp_levels[@]}"; do
-    packed=$dir/gltfpack-vp$vp.glb plain=$dir/gltfpack-vp$vp.plain.glb
-    bytes="" report=""
-    if "${gltfpack[@]}" -i "$input" -o "$packed" -cc -af 0 -vp "$vp" >"$dir/gltfpack-vp$vp.log" 2>&1 &&
-       node "$js/meshopt_decode.mjs" "$packed" "$plain" 2>>"$dir/gltfpack-vp$vp.log"; then
-      bytes=$(size "$packed")
-      verify "$input" "$dir/gltfpack-vp$vp.verify.json" "$plain" && report=$dir/gltfpack-vp$vp.verify.json
-    fi
-    printf '%s\tgltfpack\t-vp %s\t\t%s\t%s\t\t%s\t\t\t\n' "$label" "$vp" "${packed#"$out"/}" "$bytes" "${report#"$out"/}" >>"$results"
+  for mode in "${gltfpack_modes[@]}"; do
+    for vp in "${vp_levels[@]}"; do
+      name=gltfpack$mode-vp$vp
+      packed=$dir/$name.glb plain=$dir/$name.plain.glb
+      bytes="" report=""
+      if "${gltfpack[@]}" -i "$input" -o "$packed" "$mode" -af 0 -vp "$vp" >"$dir/$name.log" 2>&1 &&
+         node "$js/meshopt_decode.mjs" "$packed" "$plain" 2>>"$dir/$name.log"; then
+        bytes=$(size "$packed")
+        verify "$input" "$dir/$name.verify.json" "$plain" && report=$dir/$name.verify.json
+      fi
+      printf '%s\tgltfpack\t%s -vp %s\t\t%s\t%s\t\t%s\t\t\t\n' "$label" "$mode" "$vp" "${packed#"$out"/}" "$bytes" "${report#"$out"/}" >>"$results"
+    done
   done
-  echo "   gltfpack -vp ${vp_levels[0]}..${vp_levels[-1]} done"
+  echo "   gltfpack ${gltfpack_modes[*]} -vp ${vp_levels[0]}..${vp_levels[-1]} done"
 done
 
 machine="$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1), $(nproc) cores, $(uname -sr)"
 [ -f /etc/debian_version ] && machine="$machine, Debian $(cat /etc/debian_version)"
-revision=$(git -C "$root" rev-parse --short HEAD 2>/dev/null)
-[ -n "$(git -C "$root" status --porcelain 2>/dev/null)" ] && revision="$revision with uncommitted changes"
+# The revision of the tree SEGMORPH was built from (its build folder's CMakeCache.txt), else of this one.
+source=$(sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$(dirname "$(dirname "$segmorph")")/CMakeCache.txt" 2>/dev/null)
+[ -d "$source" ] || source=$root
+revision=$(git -C "$source" rev-parse --short HEAD 2>/dev/null)
+[ -n "$(git -C "$source" status --porcelain 2>/dev/null)" ] && revision="$revision with uncommitted changes"
 SEGMORPH_VERSION=$("$segmorph" --version) GLTFPACK_VERSION=$("${gltfpack[@]}" -v 2>&1 | head -n 1) \
 NODE_VERSION=$(node --version) MACHINE=$machine REVISION=$revision \
   node "$here/compare_gltfpack.mjs" "$out" >"$out/comparison.md"

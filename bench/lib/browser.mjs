@@ -6,23 +6,15 @@
 // plugin and DRACOLoader; gltfpack: MeshoptDecoder), the first load in the page and the median of the next ones, and
 // the decoder's own share. Time to the first played frame over a link: brotli bytes / link rate + that time.
 
-import { execFileSync } from 'node:child_process';
 import { mkdirSync } from 'node:fs';
 import path from 'node:path';
 import { chromium } from '../../tests/js/node_modules/playwright-core/index.mjs';
 import { serve } from '../../web/serve.mjs';
 import { SPEED_ERROR } from './speed.mjs';
-import { fileBytes, progress } from './tools.mjs';
+import { deliveredBytes, fileBytes, progress } from './tools.mjs';
 
 export const LINKS_MBIT = [10, 50];
 const GLTFPACK_BITS = { full: [9, 10, 11, 12, 13, 14, 15, 16], quick: [12] };
-
-// Bytes of `file` as a web server sends it: { raw, gzip, brotli }.
-export function deliveredBytes(file) {
-  const gzip = execFileSync('gzip', ['-9', '-c', file], { maxBuffer: 1 << 30 }).length;
-  const brotli = execFileSync('brotli', ['-q', '11', '-c', file], { maxBuffer: 1 << 30 }).length;
-  return { raw: fileBytes(file), gzip, brotli };
-}
 
 // The files of one input: segmorph's and the gltfpack anchor's, measured. { segmorph, gltfpack } or { failed }.
 function files(tools, input, dir, quick) {

@@ -3,7 +3,8 @@
 
 import { existsSync, readFileSync } from 'node:fs';
 import path from 'node:path';
-import { CODECS } from './rate_distortion.mjs';
+import { BAKE, CODECS, gltfpackModesDisagree } from './rate_distortion.mjs';
+import { DELIVERIES } from './tools.mjs';
 
 const finite = (x) => typeof x === 'number' && Number.isFinite(x);
 
@@ -20,15 +21,20 @@ export function checkQuick(parts, doc, chartDir) {
     for (const r of file.runs) {
       const what = `${file.label}, ${r.family} ${r.setting}`;
       if (r.failed || r.unreachable) continue;  // a flag already, or a target segmorph refuses with a reason
-      expect(r.bytes > 0 && finite(r.bpvf) && r.bpvf > 0, `${what}: bytes ${r.bytes}, bpvf ${r.bpvf}`);
+      // Every count positive; gzip and brotli add at most a few bytes of framing to data they cannot shrink.
+      const bytes = DELIVERIES.map((d) => r.bytes?.[d.key]);
+      expect(bytes.every((b) => Number.isInteger(b) && b > 0 && b <= r.bytes?.raw + 1024),
+             `${what}: bytes ${JSON.stringify(r.bytes)}`);
       expect(finite(r.kg) && r.kg >= 0 && finite(r.rmse) && finite(r.max), `${what}: KG ${r.kg}, RMSE ${r.rmse}, max ${r.max}`);
       expect(r.wall_ms > 0 && r.max_rss_kb > 0, `${what}: no time or memory measured`);
       if (r.bound) expect(r.kg <= r.bound, `${what}: KG ${r.kg} % above ${r.bound} %`);
-      if (r.family === CODECS[6].family) expect(r.kg < 1e-3, `${what}: raw float morph targets measure KG ${r.kg} %`);
+      if (r.family === BAKE) expect(r.kg < 1e-3, `${what}: raw float morph targets measure KG ${r.kg} %`);
       else if (r.family.startsWith('segmorph')) expect(r.encode && r.encode.milliseconds, `${what}: no encode report`);
       else expect(r.kg < 5, `${what}: KG ${r.kg} %: a misread or mispaired file`);
     }
   }
+  for (const file of parts.rd?.files ?? [])
+    for (const message of gltfpackModesDisagree(file.runs)) problems.push(`${file.label}, ${message}`);
   for (const file of parts.speed?.files ?? []) {
     const m = file.result;
     expect(!m.failed, `${file.label}: ${m.failed}`);
@@ -57,7 +63,9 @@ export function checkQuick(parts, doc, chartDir) {
     expect(p.peak_rss_kb.encode > 0 && p.milliseconds.encode > 0, `${what}: no time or memory`);
   }
 
-  expect(existsSync(doc) && readFileSync(doc, 'utf8').includes('## Rate and distortion'), `${doc} was not written`);
+  const page = existsSync(doc) ? readFileSync(doc, 'utf8') : '';
+  expect(page.includes('## Rate and distortion'), `${doc} was not written`);
+  for (const { name } of DELIVERIES.filter((d) => d.key !== 'raw')) expect(page.includes(`after \`${name}\``), `${doc} gives no bytes after ${name}`);
   for (const chart of ['stages.svg', 'scaling.svg', ...(parts.rd?.files ?? []).map((f) => `rd-${path.basename(f.label).replace(/\.(glb|gltf)$/i, '').toLowerCase().replace(/[^a-z0-9]+/g, '-')}.svg`)]) {
     const file = path.join(chartDir, chart);
     const text = existsSync(file) ? readFileSync(file, 'utf8') : '';

@@ -1,11 +1,12 @@
 // The rate-distortion sweep of one input: segmorph at several rates, raw float morph targets (segmorph bake),
-// gltfpack -cc and glTF-Transform (quantize, meshopt, draco) at several position precisions; every output
-// measured by segmorph verify against the input (files with EXT_meshopt_compression after meshopt_decode.mjs:
-// verify does not decode it; bytes are always those of the file the tool wrote).
+// gltfpack -cc and -cz and glTF-Transform (quantize, meshopt, draco) at several position precisions; every output
+// measured by segmorph verify against the input (files with EXT_ or KHR_meshopt_compression after
+// meshopt_decode.mjs: verify decodes neither; bytes are always those of the file the tool wrote, raw, after
+// gzip -9 and after brotli -q 11).
 
 import { mkdirSync } from 'node:fs';
 import path from 'node:path';
-import { Tools, fileBytes, progress } from './tools.mjs';
+import { Tools, deliveredBytes, progress } from './tools.mjs';
 
 // What each codec is run at. `full`: the published sweep; `quick`: the test suite's (two segmorph rates, one
 // setting per anchor).
@@ -28,15 +29,35 @@ export const CODECS = [
   { family: 'segmorph --error', tool: 'segmorph' },
   { family: 'segmorph --bpvf', tool: 'segmorph' },
   { family: 'gltfpack -cc', tool: 'gltfpack' },
+  { family: 'gltfpack -cz', tool: 'gltfpack' },
   { family: 'glTF-Transform meshopt', tool: 'gltf-transform' },
   { family: 'glTF-Transform quantize', tool: 'gltf-transform' },
   { family: 'glTF-Transform draco', tool: 'gltf-transform' },
   { family: 'raw float morph targets (bake)', tool: 'segmorph' },
 ];
 
+// The bake run's family: the reference every table and chart draws beside the codecs.
+export const BAKE = CODECS[CODECS.length - 1].family;
+
+// gltfpack's two meshopt modes: -cc writes EXT_meshopt_compression (attribute codec version 0), -cz
+// KHR_meshopt_compression (version 1). Both are lossless on the same quantized data.
+export const GLTFPACK_MODES = [['-cc', CODECS[2].family], ['-cz', CODECS[3].family]];
+
+// gltfpack -cc and -cz write the same quantized data through two lossless codecs, so at one -vp they must measure
+// the same KG; else a file was misread or mispaired. One message per -vp where they do not.
+export function gltfpackModesDisagree(runs) {
+  const [[, cc], [, cz]] = GLTFPACK_MODES;
+  const measured = runs.filter((r) => !r.failed);
+  return measured.filter((r) => r.family === cz).flatMap((z) => {
+    const c = measured.find((r) => r.family === cc && r.setting === z.setting);
+    return c && c.kg !== z.kg ? [`${cz} ${z.setting}: KG ${z.kg} %, ${cc}'s ${c.kg} %: the meshopt codecs are lossless`] : [];
+  });
+}
+
 // Runs every setting of `sweep` on `input`, writing into `dir`. Returns
-// { shape: { vertices, frames, vertex_frames }, runs: [run] }, run = { family, setting, bound, file, bytes, bpvf,
-// kg, rmse, max, wall_ms, max_rss_kb, encode (segmorph's encode JSON), failed (a message) }.
+// { shape: { vertices, frames, vertex_frames }, runs: [run] }, run = { family, setting, bound, file,
+// bytes: { raw, gzip, brotli }, kg, rmse, max, wall_ms, max_rss_kb, encode (segmorph's encode JSON),
+// failed (a message) }.
 export function sweepFile(tools, input, dir, sweep) {
   mkdirSync(dir, { recursive: true });
   const runs = [];
@@ -48,8 +69,7 @@ export function sweepFile(tools, input, dir, sweep) {
     const report = tools.verify(local(`${path.basename(written)}.verify.log`), input, measured);
     if (!report) return fail(family, setting, 'segmorph verify failed', `${path.basename(written)}.verify.log`);
     shape ??= { vertices: report.vertices, frames: report.frames, vertex_frames: report.vertex_frames };
-    const bytes = fileBytes(written);
-    runs.push({ family, setting, file: path.basename(written), bytes, bpvf: (8 * bytes) / report.vertex_frames,
+    runs.push({ family, setting, file: path.basename(written), bytes: deliveredBytes(written),
                 kg: report.kg_percent, rmse: report.rmse_over_diag, max: report.max_error_over_diag,
                 wall_ms: time?.wall_ms ?? null, max_rss_kb: time?.max_rss_kb ?? null, ...extra });
   };
@@ -60,8 +80,8 @@ export function sweepFile(tools, input, dir, sweep) {
 
   // Raw float morph targets: the size every tool starts from.
   let step = tools.run(local('bake.log'), 'segmorph', ['bake', '-q', input, '-o', local('bake.glb')]);
-  if (step.ok) record(CODECS[6].family, 'bake', local('bake.glb'), local('bake.glb'), step.time);
-  else fail(CODECS[6].family, 'bake', 'segmorph bake failed', 'bake.log');
+  if (step.ok) record(BAKE, 'bake', local('bake.glb'), local('bake.glb'), step.time);
+  else fail(BAKE, 'bake', 'segmorph bake failed', 'bake.log');
 
   for (const [option, value] of sweep.segmorph) {
     const name = `segmorph${option.replace('--', '-')}-${value}`;
@@ -88,14 +108,16 @@ export function sweepFile(tools, input, dir, sweep) {
     if (!plain.ok) return fail(family, setting, 'meshopt_decode.mjs failed', `${name}.plain.log`);
     record(family, setting, local(`${name}.glb`), local(`${name}.plain.glb`), step.time);
   };
-  for (const bits of sweep.gltfpackBits) {
-    const name = `gltfpack-vp${bits}`;
-    step = tools.run(local(`${name}.log`), 'gltfpack', ['-i', input, '-o', local(`${name}.glb`), '-cc', '-af', '0', '-vp', String(bits)]);
-    meshoptDecoded(CODECS[2].family, `-vp ${bits}`, name, step);
+  for (const [mode, family] of GLTFPACK_MODES) {
+    for (const bits of sweep.gltfpackBits) {
+      const name = `gltfpack${mode}-vp${bits}`;
+      step = tools.run(local(`${name}.log`), 'gltfpack', ['-i', input, '-o', local(`${name}.glb`), mode, '-af', '0', '-vp', String(bits)]);
+      meshoptDecoded(family, `-vp ${bits}`, name, step);
+    }
   }
-  progress(`  gltfpack: -vp ${sweep.gltfpackBits.join(', ')}`);
+  progress(`  gltfpack: ${GLTFPACK_MODES.map(([mode]) => mode).join(' and ')} at -vp ${sweep.gltfpackBits.join(', ')}`);
 
-  for (const [mode, codec] of [['meshopt', CODECS[3]], ['quantize', CODECS[4]], ['draco', CODECS[5]]]) {
+  for (const [mode, codec] of [['meshopt', CODECS[4]], ['quantize', CODECS[5]], ['draco', CODECS[6]]]) {
     for (const bits of sweep.transformBits) {
       const name = `gltf-transform-${mode}-${bits}`, setting = `${mode} ${bits} bits`;
       step = tools.run(local(`${name}.log`), 'gltf_transform', [mode, input, local(`${name}.glb`), '--quantize-position', String(bits)]);
@@ -108,14 +130,15 @@ export function sweepFile(tools, input, dir, sweep) {
   return { shape, runs };
 }
 
-// The least bytes a codec needs for a KG of at most `kg`, from its measured runs: { bytes, where }, or null
-// when `kg` is above the KG of every run (nothing at equal or higher error to compare with). Between two runs
-// on the front (those no other run beats on both bytes and KG) the bytes are interpolated linearly in log KG,
-// as ../shared/samples/README.md's reference figures are read; past the front's coarsest end they stay at its
-// bytes (its KG is lower); below its finest KG they are the finest run's, whose KG is then higher.
-export function leastBytesAt(kg, runs) {
-  const measured = runs.filter((r) => r.kg > 0 && r.bytes !== null && r.bytes !== undefined)
-    .map((r) => ({ x: Math.log(r.kg), bytes: r.bytes, setting: r.setting }));
+// The least bytes a codec needs for a KG of at most `kg`, from its measured runs, counted as `delivery` says
+// (a key of each run's bytes: raw, gzip or brotli): { bytes, where }, or null when `kg` is above the KG of every
+// run (nothing at equal or higher error to compare with). Between two runs on the front (those no other run
+// beats on both bytes and KG) the bytes are interpolated linearly in log KG, as ../shared/samples/README.md's
+// reference figures are read; past the front's coarsest end they stay at its bytes (its KG is lower); below its
+// finest KG they are the finest run's, whose KG is then higher.
+export function leastBytesAt(kg, runs, delivery) {
+  const measured = runs.filter((r) => r.kg > 0 && Number.isFinite(r.bytes?.[delivery]))
+    .map((r) => ({ x: Math.log(r.kg), bytes: r.bytes[delivery], setting: r.setting }));
   if (measured.length === 0 || kg > Math.max(...measured.map((p) => Math.exp(p.x)))) return null;
   measured.sort((a, b) => a.x - b.x || a.bytes - b.bytes);
   const front = measured.filter((p, i) => measured.slice(0, i).every((q) => q.bytes > p.bytes));

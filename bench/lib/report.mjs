@@ -2,13 +2,17 @@
 
 import { mkdirSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
-import { CODECS, leastBytesAt } from './rate_distortion.mjs';
+import { BAKE, CODECS, gltfpackModesDisagree, leastBytesAt } from './rate_distortion.mjs';
 import { SPEED_ERROR, SPEED_GLTFPACK_BITS, STAGES } from './speed.mjs';
 import { LINKS_MBIT } from './browser.mjs';
+import { DELIVERIES } from './tools.mjs';
 import { barChart, lineChart, panels } from './svg_chart.mjs';
 
-const BAKE = CODECS[6].family;
-const ANCHORS = CODECS.slice(2, 6).map((c) => c.family);
+const ANCHORS = CODECS.slice(2, -1).map((c) => c.family);
+const GLTFPACK = CODECS.filter((c) => c.tool === 'gltfpack').map((c) => c.family);
+const HEADLINE = DELIVERIES[0];
+// "after brotli -q 11 / after gzip -9 / raw": the order of the figures where a line gives all three.
+const DELIVERY_LIST = DELIVERIES.map((d) => (d.key === 'raw' ? 'raw' : `after ${d.name}`)).join(' / ');
 const fixed = (x) => (x === null || x === undefined || !Number.isFinite(x) ? '—'
   : x < 10 ? x.toFixed(3) : x < 100 ? x.toFixed(2) : x.toFixed(1));
 const kgText = (kg) => (kg === null || kg === undefined ? '—' : kg === 0 ? '0' : `${kg.toPrecision(3)} %`);
@@ -18,50 +22,85 @@ const seconds = (x) => (x / 1000).toFixed(x >= 10000 ? 1 : 2);
 const slug = (label) => path.basename(label).replace(/\.(glb|gltf)$/i, '').toLowerCase().replace(/[^a-z0-9]+/g, '-');
 const shapeText = (shape) => (shape ? `${shape.vertices} × ${shape.frames}` : '—');
 const ok = (runs) => runs.filter((r) => !r.failed && !r.unreachable);
+// Bits per vertex per frame of `bytes`: the input's Σ V × F is every tool's denominator.
+const bpvf = (bytes, shape) => (8 * bytes) / shape.vertex_frames;
 
 function metaLine(name, meta) {
   if (!meta) return null;
   const load = meta.load ? `, load average ${meta.load.map((x) => x.toFixed(2)).join(' / ')} (start / end)` : '';
-  return `- ${name}: ${meta.started}, ${meta.minutes.toFixed(1)} min${load}.`;
+  return `- ${name}: segmorph revision ${meta.revision}, ${meta.started}, ${meta.minutes.toFixed(1)} min${load}.`;
 }
 
-// The rate-distortion chart of one file: bpvf against KG, every codec a curve, bake a reference line.
+// The rate-distortion chart of one file: bpvf after brotli against KG, every codec a curve, bake a reference line.
 function rdChart(file) {
   const runs = ok(file.runs);
+  const rate = (r) => bpvf(r.bytes[HEADLINE.key], file.shape);
   const series = CODECS.filter((c) => c.family !== BAKE).map((c) => ({
     name: c.family,
-    points: runs.filter((r) => r.family === c.family).map((r) => [r.kg, r.bpvf]).sort((a, b) => a[0] - b[0]),
+    points: runs.filter((r) => r.family === c.family).map((r) => [r.kg, rate(r)]).sort((a, b) => a[0] - b[0]),
     dashed: c.tool === 'gltf-transform',
   })).filter((s) => s.points.length > 0);
   const bake = runs.find((r) => r.family === BAKE);
   return lineChart({
-    title: `${file.label} (V × F = ${shapeText(file.shape)})`,
+    title: `${file.label} (V × F = ${shapeText(file.shape)}), bytes after ${HEADLINE.name}`,
     x: { label: 'KG error (%)', log: true },
-    y: { label: 'bits per vertex per frame (whole file)', log: true },
+    y: { label: `bits per vertex per frame, ${HEADLINE.name}`, log: true },
     series,
-    references: bake ? [{ name: `raw floats (bake): ${fixed(bake.bpvf)} bpvf, KG 0`, y: bake.bpvf }] : [],
+    references: bake ? [{ name: `raw floats (bake): ${fixed(rate(bake))} bpvf, KG 0`, y: rate(bake) }] : [],
   });
 }
 
-// When every run of an anchor has a lower KG than `kg`: its smallest file, an upper bound on what it needs.
-function upperBound(kg, runs) {
+// When every run of an anchor has a lower KG than `kg`: its smallest file counted as `delivery` says, an upper
+// bound on what it needs.
+function upperBound(kg, runs, delivery) {
   const below = runs.filter((r) => r.kg <= kg);
   if (below.length === 0) return null;
-  return { bytes: Math.min(...below.map((r) => r.bytes)), upper: true };
+  return { bytes: Math.min(...below.map((r) => r.bytes[delivery])), upper: true };
+}
+
+// segmorph's --error `target` run of a file, or undefined when it failed.
+const segmorphAt = (runs, target) => runs.find((r) => r.family === CODECS[0].family && r.bound === target);
+
+// One equal-KG table: per file, bpvf of segmorph --error `target` and of the least bytes each anchor needs at its
+// KG, all counted as `delivery` says, with each anchor's bytes over segmorph's.
+function equalKgTable(rd, target, delivery, print) {
+  print(`| file | V × F | raw float (bake) | segmorph --error ${target} | ${ANCHORS.join(' | ')} |`);
+  print(`|---|---|---|---|${ANCHORS.map(() => '---|').join('')}`);
+  for (const file of rd.files) {
+    const runs = ok(file.runs);
+    const seg = segmorphAt(runs, target);
+    const bake = runs.find((r) => r.family === BAKE);
+    const bakeRate = bake ? fixed(bpvf(bake.bytes[delivery], file.shape)) : '—';
+    if (!seg) { print(`| ${file.label} | ${shapeText(file.shape)} | ${bakeRate} | failed |${ANCHORS.map(() => ' |').join('')}`); continue; }
+    const cells = ANCHORS.map((family) => {
+      const anchor = runs.filter((r) => r.family === family);
+      const at = leastBytesAt(seg.kg, anchor, delivery) ?? upperBound(seg.kg, anchor, delivery);
+      if (!at) return '—';
+      const bound = at.upper ? '≤ ' : '';
+      return `${bound}${fixed(bpvf(at.bytes, file.shape))} (${bound}${(at.bytes / seg.bytes[delivery]).toFixed(2)}×)`;
+    });
+    print(`| ${file.label} | ${shapeText(file.shape)} | ${bakeRate} | ${fixed(bpvf(seg.bytes[delivery], file.shape))} @ ${kgText(seg.kg)} | ${cells.join(' | ')} |`);
+  }
+  print();
 }
 
 function rateDistortion(rd, charts, lines, flags) {
   const print = (line = '') => lines.push(line);
   print('## Rate and distortion');
   print();
-  print('Every output of every tool measured by `segmorph verify` against its input. **bpvf**: 8 × the bytes of the ' +
-        'file the tool wrote / Σ V × F over the input\'s animated primitives and clips (the same denominator for every ' +
-        'tool); **KG**: Karni & Gotsman\'s error in %, the worst animated primitive; RMSE and maximum error over the ' +
-        'first frame\'s bounding-box diagonal in the full tables. Charts: both axes logarithmic; the dashed line is ' +
-        'the raw float morph targets `segmorph bake` writes (KG 0).');
+  print('Every output of every tool measured by `segmorph verify` against its input. **Bytes** are those of the file ' +
+        `the tool wrote as a web server sends it: after \`${HEADLINE.name}\` (the headline: the equal-KG ratios, the ` +
+        'summary and the charts), after `gzip -9`, and raw (the file as written) beside them. gltfpack\'s meshopt ' +
+        'codecs are made to be followed by one of those; segmorph\'s range-coded streams do not shrink further. ' +
+        '**bpvf**: 8 × those bytes / Σ V × F over the input\'s animated primitives and clips (the same denominator ' +
+        'for every tool); **KG**: Karni & Gotsman\'s error in %, the worst animated primitive; RMSE and maximum ' +
+        'error over the first frame\'s bounding-box diagonal in the full tables. Charts: both axes logarithmic; the ' +
+        'dashed line is the raw float morph targets `segmorph bake` writes (KG 0).');
   print();
   print('Settings: segmorph `encode --bpvf 0.5, 1, 2, 4, 8` and `--error 1, 0.5, 0.15, 0.05`; gltfpack 1.3 ' +
-        '`-cc -af 0 -vp 8` to `16`; glTF-Transform 4.5 `meshopt`, `quantize` and `draco` with `--quantize-position ' +
+        '`-cc -af 0 -vp 8` to `16` (EXT_meshopt_compression) and `-cz -af 0 -vp 8` to `16` (KHR_meshopt_compression, ' +
+        'attribute codec version 1: both lossless on the same quantized data, so their KG is the same at each -vp); ' +
+        'glTF-Transform 4.5 `meshopt`, `quantize` and `draco` with `--quantize-position ' +
         '8, 10, 12, 14, 16` (their other options at their defaults). Draco (KHR_draco_mesh_compression) does not ' +
         'cover morph targets: on morph-target files glTF-Transform compresses the base mesh only and leaves the ' +
         'targets as floats; on skinned files it compresses the whole mesh, and the animation is the joints\'.');
@@ -73,45 +112,38 @@ function rateDistortion(rd, charts, lines, flags) {
     print('bpvf of the least bytes each anchor needs for segmorph\'s KG or lower, interpolated in log KG between its ' +
           'settings (the settings no other beats on both bytes and KG), and in brackets its bytes over segmorph\'s. ' +
           '"≤": even the anchor\'s coarsest setting measured has a lower KG than segmorph, so its smallest file is an ' +
-          'upper bound (a coarser setting might need fewer bytes); "—": the anchor produced nothing measurable.');
+          'upper bound (a coarser setting might need fewer bytes); "—": the anchor produced nothing measurable. ' +
+          `First with every file after \`${HEADLINE.name}\`, then after \`${DELIVERIES[1].name}\`, then raw (the files as written).`);
     print();
-    print(`| file | V × F | raw float (bake) | segmorph --error ${target} | ${ANCHORS.join(' | ')} |`);
-    print(`|---|---|---|---|${ANCHORS.map(() => '---|').join('')}`);
-    for (const file of rd.files) {
-      const runs = ok(file.runs);
-      const seg = runs.find((r) => r.family === CODECS[0].family && r.bound === target);
-      const bake = runs.find((r) => r.family === BAKE);
-      if (!seg) { print(`| ${file.label} | ${shapeText(file.shape)} | ${fixed(bake?.bpvf)} | failed |${ANCHORS.map(() => ' |').join('')}`); continue; }
-      const cells = ANCHORS.map((family) => {
-        const anchor = runs.filter((r) => r.family === family);
-        const at = leastBytesAt(seg.kg, anchor) ?? upperBound(seg.kg, anchor);
-        if (!at) return '—';
-        const bound = at.upper ? '≤ ' : '';
-        return `${bound}${fixed((8 * at.bytes) / file.shape.vertex_frames)} (${bound}${(at.bytes / seg.bytes).toFixed(2)}×)`;
-      });
-      print(`| ${file.label} | ${shapeText(file.shape)} | ${fixed(bake?.bpvf)} | ${fixed(seg.bpvf)} @ ${kgText(seg.kg)} | ${cells.join(' | ')} |`);
+    for (const delivery of DELIVERIES) {
+      print(`Bytes ${delivery.key === 'raw' ? 'raw, as written' : `after \`${delivery.name}\``}${delivery === HEADLINE ? ' (the headline)' : ''}:`);
+      print();
+      equalKgTable(rd, target, delivery.key, print);
     }
-    print();
   }
 
   print('### Per file');
+  print();
+  print(`Charts: bpvf after \`${HEADLINE.name}\`. Tables: bytes after each, bpvf after \`${HEADLINE.name}\` and raw.`);
   print();
   for (const file of rd.files) {
     const name = `rd-${slug(file.label)}.svg`;
     charts.set(name, rdChart(file));
     print(`#### ${file.label}`);
     print();
-    print(`![bpvf against KG error, ${file.label}](${charts.link(name)})`);
+    print(`![bpvf after ${HEADLINE.name} against KG error, ${file.label}](${charts.link(name)})`);
     print();
     print('<details><summary>every run</summary>');
     print();
-    print('| codec | setting | bytes | bpvf | KG | RMSE / diag | max / diag | wall time | peak memory |');
-    print('|---|---|---|---|---|---|---|---|---|');
+    print(`| codec | setting | ${DELIVERIES.map((d) => `${d.name} bytes`).join(' | ')} | bpvf ${HEADLINE.name} | bpvf raw | KG | RMSE / diag | max / diag | wall time | peak memory |`);
+    print(`|---|---|${DELIVERIES.map(() => '---|').join('')}---|---|---|---|---|---|---|`);
+    const blank = ' |'.repeat(DELIVERIES.length + 6);
     for (const r of file.runs) {
-      if (r.failed) { print(`| ${r.family} | ${r.setting} | failed: ${r.failed} | | | | | | |`); continue; }
-      if (r.unreachable) { print(`| ${r.family} | ${r.setting} | refused: ${r.unreachable} | | | | | | |`); continue; }
-      print(`| ${r.family} | ${r.setting} | ${r.bytes} | ${fixed(r.bpvf)} | ${kgText(r.kg)} | ${r.rmse.toExponential(2)} | ` +
-            `${r.max.toExponential(2)} | ${ms(r.wall_ms)} ms | ${mb(r.max_rss_kb)} MB |`);
+      if (r.failed) { print(`| ${r.family} | ${r.setting} | failed: ${r.failed} |${blank}`); continue; }
+      if (r.unreachable) { print(`| ${r.family} | ${r.setting} | refused: ${r.unreachable} |${blank}`); continue; }
+      print(`| ${r.family} | ${r.setting} | ${DELIVERIES.map((d) => r.bytes[d.key]).join(' | ')} | ` +
+            `${fixed(bpvf(r.bytes[HEADLINE.key], file.shape))} | ${fixed(bpvf(r.bytes.raw, file.shape))} | ${kgText(r.kg)} | ` +
+            `${r.rmse.toExponential(2)} | ${r.max.toExponential(2)} | ${ms(r.wall_ms)} ms | ${mb(r.max_rss_kb)} MB |`);
     }
     print();
     print('</details>');
@@ -122,6 +154,7 @@ function rateDistortion(rd, charts, lines, flags) {
       else if (r.bound !== null && r.bound !== undefined && r.kg > r.bound)
         flags.push(`${file.label}, segmorph ${r.setting}: KG ${kgText(r.kg)} is above the requested ${r.bound} %`);
     }
+    flags.push(...gltfpackModesDisagree(file.runs).map((message) => `${file.label}, ${message}`));
   }
   bpvfTargets(rd, lines);
 }
@@ -135,10 +168,11 @@ function bpvfTargets(rd, lines) {
   if (targets.length === 0) return;
   print('### segmorph --bpvf: target and result');
   print();
-  print('Per target: the whole file\'s bpvf, then in brackets the part the animation streams and the Draco base ' +
-        'meshes take (from encode --json) and the part the rest of the file takes (images, JSON, and the meshes, skins ' +
-        'and node animation segmorph leaves as they are). A whole file more than 10 % off its target is in bold. ' +
-        '"below the rest": segmorph refuses a target below what the rest of the file takes alone.');
+  print('Per target: the whole file\'s bpvf, raw (the rate control budgets the file as written), then in brackets the ' +
+        'part the animation streams and the Draco base meshes take (from encode --json) and the part the rest of the ' +
+        'file takes (images, JSON, and the meshes, skins and node animation segmorph leaves as they are). A whole file ' +
+        'more than 10 % off its target is in bold. "below the rest": segmorph refuses a target below what the rest of ' +
+        'the file takes alone.');
   print();
   print(`| file | ${targets.map((t) => `--bpvf ${t}`).join(' | ')} |`);
   print(`|---|${targets.map(() => '---|').join('')}`);
@@ -147,9 +181,9 @@ function bpvfTargets(rd, lines) {
       const r = file.runs.find((x) => x.target_bpvf === target);
       if (r?.unreachable) return 'below the rest';
       if (!r || r.failed || !r.encode) return 'failed';
-      const coded = (8 * (r.encode.animation_bytes + r.encode.draco_bytes)) / file.shape.vertex_frames;
-      const whole = Math.abs(r.bpvf - target) > 0.1 * target ? `**${fixed(r.bpvf)}**` : fixed(r.bpvf);
-      return `${whole} (${fixed(coded)} + ${fixed(r.bpvf - coded)})`;
+      const coded = bpvf(r.encode.animation_bytes + r.encode.draco_bytes, file.shape), rate = bpvf(r.bytes.raw, file.shape);
+      const whole = Math.abs(rate - target) > 0.1 * target ? `**${fixed(rate)}**` : fixed(rate);
+      return `${whole} (${fixed(coded)} + ${fixed(rate - coded)})`;
     });
     print(`| ${file.label} | ${cells.join(' | ')} |`);
   }
@@ -343,12 +377,64 @@ function scalingPart(scaling, charts, lines, flags) {
   print();
 }
 
-// Ratios over files: "median 2.1× (0.5× to 19×)".
-function spread(values) {
+// Values over files: "median 2.1× (0.5× to 19×)", each value written by `text` (a ratio by default).
+const ratioText = (v) => `${v.toFixed(v < 10 ? 2 : 1)}×`;
+function spread(values, text = ratioText) {
   const sorted = [...values].sort((a, b) => a - b);
   const median = sorted.length % 2 ? sorted[(sorted.length - 1) / 2] : (sorted[sorted.length / 2 - 1] + sorted[sorted.length / 2]) / 2;
-  const x = (v) => `${v.toFixed(v < 10 ? 2 : 1)}×`;
-  return `median ${x(median)} (${x(sorted[0])} to ${x(sorted[sorted.length - 1])})`;
+  return `median ${text(median)} (${text(sorted[0])} to ${text(sorted[sorted.length - 1])})`;
+}
+
+// The rate-distortion lines of the summary: segmorph against each anchor at its KG, the bytes counted after
+// brotli, then raw; the sequences against gltfpack's better mode and against raw floats; what brotli takes off.
+function rdSummary(rd, print) {
+  const raw = DELIVERIES.find((d) => d.key === 'raw');
+  // The least bytes the runs of `families` need at the KG of segmorph's --error `target` over segmorph's, for one
+  // file; null when segmorph failed or leastBytesAt has no answer.
+  const ratioAt = (file, target, families, delivery) => {
+    const runs = ok(file.runs);
+    const seg = segmorphAt(runs, target);
+    const at = seg && leastBytesAt(seg.kg, runs.filter((r) => families.includes(r.family)), delivery);
+    return at ? at.bytes / seg.bytes[delivery] : null;
+  };
+  for (const target of [0.5, 0.15]) {
+    for (const delivery of [HEADLINE, raw]) {
+      const cells = ANCHORS.map((family) => {
+        const ratios = rd.files.map((file) => ratioAt(file, target, [family], delivery.key)).filter((x) => x !== null);
+        const smaller = ratios.filter((x) => x > 1).length;
+        return ratios.length ? `${family}: smaller on ${smaller} of ${ratios.length} files, its bytes / segmorph's ${spread(ratios)}`
+                             : `${family}: nothing to compare`;
+      });
+      const bytes = delivery === raw ? 'raw bytes, as written' : `bytes after \`${delivery.name}\``;
+      print(`- segmorph \`--error ${target}\` against each anchor at equal or lower KG, ${bytes} (files where the anchor has ` +
+            `settings on both sides of segmorph's KG): ${cells.join('; ')}.`);
+    }
+  }
+
+  const sequences = rd.files.filter((f) => f.label.startsWith('sequences/'));
+  if (sequences.length === 0) return;
+  const name = (file) => path.basename(file.label);
+  for (const target of [0.5, 0.15]) {
+    const cells = sequences.map((file) => {
+      const ratios = DELIVERIES.map((d) => ratioAt(file, target, GLTFPACK, d.key));
+      return `${name(file)} ${ratios.map((x) => (x === null ? '—' : ratioText(x))).join(' / ')}`;
+    });
+    print(`- The sequences at \`--error ${target}\`: gltfpack's least bytes at segmorph's KG, the better of ` +
+          `${GLTFPACK.join(' and ')}, over segmorph's, ${DELIVERY_LIST}: ${cells.join(', ')}.`);
+  }
+  const bake = sequences.map((file) => {
+    const runs = ok(file.runs);
+    const seg = segmorphAt(runs, 0.15), floats = runs.find((r) => r.family === BAKE);
+    if (!seg || !floats) return null;
+    return `${name(file)} ${DELIVERIES.map((d) => (floats.bytes[d.key] / seg.bytes[d.key]).toFixed(0)).join(' / ')}×`;
+  }).filter(Boolean);
+  if (bake.length) print(`- Against raw float morph targets at \`--error 0.15\`, ${DELIVERY_LIST}: ${bake.join(', ')} fewer bytes.`);
+  const shrink = CODECS.map(({ family }) => {
+    const runs = rd.files.flatMap((f) => ok(f.runs).filter((r) => r.family === family));
+    const percent = (v) => `${Math.round(v) || 0} %`;  // no "-0 %" for a file brotli grows by a few bytes
+    return runs.length ? `${family} ${spread(runs.map((r) => 100 * (1 - r.bytes[HEADLINE.key] / r.bytes.raw)), percent)}` : null;
+  }).filter(Boolean);
+  print(`- What \`${HEADLINE.name}\` takes off the file as written, over every run of every file: ${shrink.join('; ')}.`);
 }
 
 // The headline figures, computed from the tables below.
@@ -356,33 +442,7 @@ function summary(parts, lines) {
   const print = (line = '') => lines.push(line);
   print('## Summary');
   print();
-  if (parts.rd) {
-    for (const target of [0.5, 0.15]) {
-      const cells = ANCHORS.map((family) => {
-        const ratios = [];
-        let smaller = 0, compared = 0;
-        for (const file of parts.rd.files) {
-          const runs = ok(file.runs);
-          const seg = runs.find((r) => r.family === CODECS[0].family && r.bound === target);
-          const at = seg && leastBytesAt(seg.kg, runs.filter((r) => r.family === family));
-          if (!at) continue;
-          compared++;
-          if (seg.bytes < at.bytes) smaller++;
-          ratios.push(at.bytes / seg.bytes);
-        }
-        return compared ? `${family}: smaller on ${smaller} of ${compared} files, its bytes / segmorph's ${spread(ratios)}` : `${family}: nothing to compare`;
-      });
-      print(`- segmorph \`--error ${target}\` against each anchor at equal or lower KG (files where the anchor has settings on both sides of segmorph's KG): ${cells.join('; ')}.`);
-    }
-
-    const sequences = parts.rd.files.filter((f) => f.label.startsWith('sequences/'));
-    const raw = sequences.map((f) => {
-      const runs = ok(f.runs);
-      const seg = runs.find((r) => r.family === CODECS[0].family && r.bound === 0.15), bake = runs.find((r) => r.family === BAKE);
-      return seg && bake ? `${path.basename(f.label)} ${(bake.bytes / seg.bytes).toFixed(0)}×` : null;
-    }).filter(Boolean);
-    if (raw.length) print(`- Against raw float morph targets at \`--error 0.15\`: ${raw.join(', ')} fewer bytes.`);
-  }
+  if (parts.rd) rdSummary(parts.rd, print);
   if (parts.speed) {
     const ratios = parts.speed.files.filter((f) => !f.result.failed).map((f) => f.result.encode.wall_ms / f.result.gltfpack.wall_ms);
     if (ratios.length) print(`- Encode time (whole command) over gltfpack's on the same file: ${spread(ratios)}.`);
@@ -450,7 +510,8 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
     print();
     print(`- Machine: ${anyMeta.machine}. Other work shared the 2 cores while this ran (the load averages below), so ` +
           'times are upper bounds; CPU times are steadier than wall times.');
-    print(`- segmorph revision ${anyMeta.revision}; ${anyMeta.versions.join('; ')}.`);
+    // Each part names the revision it ran: the parts are saved, and can be run at different times.
+    print(`- ${anyMeta.versions.join('; ')}.`);
     for (const [name, key] of [['Rate and distortion', 'rd'], ['Speed and memory', 'speed'], ['Scaling', 'scaling'],
                                ['In the browser', 'browser']])
       if (parts[key]) print(metaLine(name, parts[key].meta));

@@ -2,7 +2,7 @@
 // (wall time, CPU time, peak resident memory), its output and errors kept in a log beside the files it writes,
 // one progress line on stderr per step that takes long.
 
-import { spawnSync } from 'node:child_process';
+import { execFileSync, spawnSync } from 'node:child_process';
 import { existsSync, readFileSync, writeFileSync, statSync, readdirSync } from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -19,6 +19,7 @@ export class Tools {
   constructor(root, build) {
     const js = path.join(root, 'tests', 'js');
     this.root = root;
+    this.build = build;
     this.paths = {
       segmorph: path.join(build, 'converter', 'segmorph'),
       run_measured: path.join(build, 'bench', 'run_measured'),
@@ -78,12 +79,36 @@ export class Tools {
 
 export const fileBytes = (file) => statSync(file).size;
 
+// The ways a file reaches a web page, the headline first: what a web server sends after brotli or gzip (gltfpack's
+// meshopt codecs are designed to be followed by one; segmorph's range-coded streams do not shrink further), and
+// the file as written. Each names a key of deliveredBytes's answer and how the tables and captions say it.
+export const DELIVERIES = [
+  { key: 'brotli', name: 'brotli -q 11' },
+  { key: 'gzip', name: 'gzip -9' },
+  { key: 'raw', name: 'raw' },
+];
+
+// Bytes of `file` as a web server sends it: { raw, gzip, brotli } (Debian's gzip and brotli commands).
+export function deliveredBytes(file) {
+  const gzip = execFileSync('gzip', ['-9', '-c', file], { maxBuffer: 1 << 30 }).length;
+  const brotli = execFileSync('brotli', ['-q', '11', '-c', file], { maxBuffer: 1 << 30 }).length;
+  return { raw: fileBytes(file), gzip, brotli };
+}
+
 // The machine, in one line: processor, cores, memory, kernel, distribution.
 export function machine() {
   const cpu = os.cpus()[0]?.model?.trim() || 'unknown processor';
   let distribution = '';
   if (existsSync('/etc/debian_version')) distribution = `, Debian ${readFileSync('/etc/debian_version', 'utf8').trim()}`;
   return `${cpu}, ${os.cpus().length} cores, ${(os.totalmem() / 2 ** 30).toFixed(0)} GiB, ${os.type()} ${os.release()}${distribution}`;
+}
+
+// The source tree `build` was configured from (its CMakeCache.txt's CMAKE_HOME_DIRECTORY), or null: the tree whose
+// revision the binaries are, which is not the harness's when --build names a build of another checkout.
+export function buildSource(build) {
+  const cache = path.join(build, 'CMakeCache.txt');
+  if (!existsSync(cache)) return null;
+  return readFileSync(cache, 'utf8').match(/^CMAKE_HOME_DIRECTORY:INTERNAL=(.+)$/m)?.[1] ?? null;
 }
 
 // The git revision of `root`, with a note when the work tree has changes.
