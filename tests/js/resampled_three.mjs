@@ -48,9 +48,7 @@
 // counterpart clip or primitive) or ORIGINAL has nothing deforming, 2 on usage or load errors.
 
 import * as THREE from 'three';
-import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
-import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
-import { glbBytes, readAsset } from './glb.mjs';
+import { loadGltf, normalizeRotations, owningNode, primitiveObjects } from './three_scene.mjs';
 
 const USAGE = 'usage: node resampled_three.mjs ORIGINAL OTHER [--json] [--times keys|fps:N] [--pairing nearest|trajectory] [--normalize-rotations]';
 const MAX_KEY_RATE = 60; // keys per second above which verify samples a grid
@@ -90,107 +88,6 @@ function parseArgs(argv) {
   return opts;
 }
 
-// ---------------------------------------------------------------- loading (as compare_three.mjs does)
-
-// Drops images, textures and samplers (no DOM in Node; only geometry matters).
-function stripTextures(json) {
-  delete json.images;
-  delete json.textures;
-  delete json.samplers;
-  const strip = (object) => {
-    if (object === null || typeof object !== 'object') return;
-    for (const key of Object.keys(object)) {
-      if (/texture$/i.test(key) && object[key] && typeof object[key] === 'object' && 'index' in object[key]) delete object[key];
-      else strip(object[key]);
-    }
-  };
-  (json.materials || []).forEach(strip);
-  for (const list of ['extensionsUsed', 'extensionsRequired']) {
-    if (json[list]) json[list] = json[list].filter((name) => !/texture/i.test(name));
-  }
-}
-
-// One GLB whose BIN chunk holds every buffer with data, so that GLTFLoader fetches nothing; buffers
-// without data (meshopt fallbacks) stay separate.
-function packGlb(json, buffers) {
-  const remap = [];
-  const parts = [];
-  let length = 0;
-  const packed = buffers.length > 0 ? [{ byteLength: 0 }] : [];
-  buffers.forEach((data, i) => {
-    if (data === null) {
-      const { uri, ...rest } = json.buffers[i];
-      remap.push({ buffer: packed.length, offset: 0 });
-      packed.push(rest);
-    } else {
-      length = Math.ceil(length / 16) * 16;
-      remap.push({ buffer: 0, offset: length });
-      parts.push({ data, offset: length });
-      length += data.length;
-    }
-  });
-  const move = (ref) => {
-    const r = remap[ref.buffer];
-    ref.buffer = r.buffer;
-    if (r.buffer === 0) ref.byteOffset = (ref.byteOffset || 0) + r.offset;
-  };
-  for (const view of json.bufferViews || []) {
-    move(view);
-    const meshopt = view.extensions && view.extensions.EXT_meshopt_compression;
-    if (meshopt) move(meshopt);
-  }
-  if (packed.length > 0) {
-    packed[0].byteLength = length;
-    json.buffers = packed;
-  }
-  const bin = new Uint8Array(length);
-  for (const { data, offset } of parts) bin.set(data, offset);
-  const glb = glbBytes(json, packed.length > 0 ? bin : null);
-  return glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength);
-}
-
-async function loadGltf(file) {
-  try {
-    const { json, buffers } = await readAsset(file);
-    stripTextures(json);
-    const loader = new GLTFLoader();
-    loader.setMeshoptDecoder(MeshoptDecoder);
-    const gltf = await loader.parseAsync(packGlb(json, buffers), '');
-    const nodeObjects = new Map(); // glTF node index -> Object3D
-    for (const [object, assoc] of gltf.parser.associations) {
-      if (object.isObject3D && assoc.nodes !== undefined) nodeObjects.set(assoc.nodes, object);
-    }
-    return { file, gltf, json: gltf.parser.json, parser: gltf.parser, scene: gltf.scene, clips: gltf.animations, nodeObjects };
-  } catch (err) {
-    throw new Error(`${file}: ${err && err.message ? err.message : err}`);
-  }
-}
-
-// The objects drawing a node's primitives, by primitive index (a Mesh, or the Meshes of a Group).
-function primitiveObjects(asset, nodeIndex) {
-  const nodeDef = asset.json.nodes[nodeIndex];
-  const nodeObject = asset.nodeObjects.get(nodeIndex);
-  const result = [];
-  if (nodeDef.mesh === undefined || !nodeObject) return result;
-  const visit = (object) => {
-    const assoc = asset.parser.associations.get(object);
-    if (object !== nodeObject && assoc && assoc.nodes !== undefined) return; // a child glTF node
-    if (assoc && assoc.meshes === nodeDef.mesh && assoc.primitives !== undefined) result[assoc.primitives] = object;
-    object.children.forEach(visit);
-  };
-  visit(nodeObject);
-  return result;
-}
-
-// The glTF node an object belongs to (itself or the Group above it), or -1.
-function owningNode(asset, object) {
-  for (let o = object; o; o = o.parent) {
-    const assoc = asset.parser.associations.get(o);
-    if (assoc && assoc.nodes !== undefined) return assoc.nodes;
-  }
-  return -1;
-}
-
 // Every drawable primitive of a file: { node, mesh, primitive, object }.
 function allPrimitives(asset) {
   const list = [];
@@ -215,7 +112,7 @@ function clipTracks(asset, clip) {
   return clip.tracks.map((track) => {
     const parsed = THREE.PropertyBinding.parseTrackName(track.name);
     const object = THREE.PropertyBinding.findNode(asset.scene, parsed.nodeName);
-    return { node: object ? owningNode(asset, object) : -1, property: parsed.propertyName, times: track.times };
+    return { node: object ? (owningNode(asset, object)?.index ?? -1) : -1, property: parsed.propertyName, times: track.times };
   });
 }
 
@@ -262,20 +159,6 @@ function counterpartClip(original, other, c) {
 
 // ---------------------------------------------------------------- posing
 
-// Rotation keys and node rotations of unit length (--normalize-rotations).
-function normalizeRotations(asset) {
-  for (const clip of asset.clips) {
-    for (const track of clip.tracks) {
-      if (!(track instanceof THREE.QuaternionKeyframeTrack)) continue;
-      const v = track.values;
-      for (let i = 0; i + 3 < v.length; i += 4) {
-        const n = Math.hypot(v[i], v[i + 1], v[i + 2], v[i + 3]);
-        if (n > 0) for (let k = 0; k < 4; k++) v[i + k] /= n;
-      }
-    }
-  }
-  asset.scene.traverse((o) => o.quaternion.normalize());
-}
 
 // Poses a scene at time t of a clip from its rest state, with a fresh mixer each time (a reused mixer
 // skips writing values it wrote before, which a reset to rest would leave wrong).
