@@ -1,9 +1,9 @@
 #!/usr/bin/env node
 // The benchmark harness: segmorph against raw float morph targets, gltfpack and glTF-Transform on every
-// animated sample (rate and distortion), speed and memory per file, and how the codec scales; then
-// docs/benchmarks.md with its charts (docs/bench/*.svg).
+// animated sample (rate and distortion), speed and memory per file, how the codec scales, large skinned files and
+// the browser; then docs/benchmarks.md with its charts (docs/bench/*.svg).
 //
-//   node bench/benchmarks.mjs [--parts rd,speed,scaling,browser] [--build DIR] [--samples DIR] [--out DIR] [--doc FILE]
+//   node bench/benchmarks.mjs [--parts rd,speed,scaling,large,browser] [--build DIR] [--samples DIR] [--out DIR] [--doc FILE]
 //   node bench/benchmarks.mjs --quick [--input FILE] [--build DIR] [--out DIR]
 //
 // --build    the Release build folder (default build/)
@@ -14,7 +14,8 @@
 // --parts    which parts to run (default all; --parts '' runs none); the page is always rebuilt from the saved
 //            results of every part
 // --quick    the test suite's run: one bundled file (samples/Fox/Fox.glb), two segmorph rates, one setting
-//            per anchor, two tiny scaling points; the page goes to OUT/benchmarks.md; then checks that every
+//            per anchor, two tiny scaling points, three copies of the Fox as the large skinned file; the page goes
+//            to OUT/benchmarks.md; then checks that every
 //            output exists and every measured value is sane (no timing is judged)
 // Progress on stderr. Exit status: 0 when every step ran and every segmorph file met its error bound; 1 when
 // one did not (the page's Flags say which) or a tool is missing; 2 on bad usage.
@@ -26,15 +27,16 @@ import { fileURLToPath } from 'node:url';
 import { SWEEPS, sweepFile } from './lib/rate_distortion.mjs';
 import { writeReport } from './lib/report.mjs';
 import { SCALING, measureScaling } from './lib/scaling.mjs';
+import { LARGE, measureLarge } from './lib/large.mjs';
 import { benchmarkCodec, measureFile } from './lib/speed.mjs';
 import { measureBrowser } from './lib/browser.mjs';
 import { StepError, Tools, buildSource, gltfFiles, machine, progress, revision } from './lib/tools.mjs';
 import { checkQuick } from './lib/quick_checks.mjs';
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
-const USAGE = 'usage: node bench/benchmarks.mjs [--quick [--input FILE]] [--parts rd,speed,scaling,browser] [--build DIR] ' +
+const USAGE = 'usage: node bench/benchmarks.mjs [--quick [--input FILE]] [--parts rd,speed,scaling,large,browser] [--build DIR] ' +
               '[--samples DIR] [--out DIR] [--doc FILE]';
-const PARTS = ['rd', 'speed', 'scaling', 'browser'];
+const PARTS = ['rd', 'speed', 'scaling', 'large', 'browser'];
 
 function parseArguments(argv) {
   const options = { quick: false, parts: PARTS, build: path.join(root, 'build'),
@@ -111,7 +113,7 @@ async function main() {
   if (options.quick) rmSync(options.out, { recursive: true, force: true });
   mkdirSync(options.out, { recursive: true });
   const mode = options.quick ? 'quick' : 'full';
-  const files = options.parts.some((p) => p !== 'scaling') ? inputs(tools, options) : [];
+  const files = options.parts.some((p) => p !== 'scaling' && p !== 'large') ? inputs(tools, options) : [];
   const folder = (part, index, label) => path.join(options.out, part, `${index + 1}-${path.basename(label).replace(/\.(glb|gltf)$/i, '')}`);
 
   if (options.parts.includes('rd'))
@@ -137,6 +139,12 @@ async function main() {
   }
   if (options.parts.includes('scaling'))
     await runPart('scaling', options, tools, () => ({ plan: SCALING[mode], result: measureScaling(tools, path.join(options.out, 'scaling'), SCALING[mode]) }));
+
+  if (options.parts.includes('large')) {
+    const samples = options.quick ? path.join(root, 'samples') : options.samples;
+    if (!existsSync(samples)) throw new StepError(`${samples} is absent: the large part copies its skinned samples (--samples DIR)`);
+    await runPart('large', options, tools, () => measureLarge(tools, samples, path.join(options.out, 'large'), LARGE[mode]));
+  }
 
   if (options.parts.includes('browser')) {
     tools.require('three');

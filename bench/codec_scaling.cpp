@@ -3,6 +3,7 @@
 // ring and tube radii swell in travelling waves while it bends, twists and drifts: smooth, non-rigid motion
 // that looks the same at every resolution, so only V and F change between runs.
 //   codec_scaling --vertices V --frames F [--error E | --bpvf R]
+//   codec_scaling --vertices V --frames F --write-cache PREFIX
 // One run measures one (V, F) point and prints one JSON object on stdout:
 //   vertices, frames, triangles, input_mb (the frames, V × F × 3 floats), clusters, stream_bytes, bpvf (the
 //   stream's), kg_percent (decoded against the input), milliseconds {generate, draco, segmentation, motion,
@@ -13,10 +14,14 @@
 // The base mesh is Draco's (edgebreaker, 14 bits, timed with the decoding and vertex matching the container
 // does); the codec encodes against the stand-in base of the other bench tools so that it sees V vertices in
 // the generator's order. Run one point per process: the peak resident set only grows.
+// With --write-cache, nothing is measured: the sequence is written as PREFIX.obj (frame 0 and the triangles) and
+// PREFIX.pc2 (every frame, 30 fps), a vertex cache segmorph reads (docs/caches.md) and bakes into the glTF of
+// one-hot morph targets the harness measures whole files on (bench/lib/large.mjs).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -112,10 +117,39 @@ FrameSequence torus_frames(const Torus& torus, size_t frame_count) {
   return clip;
 }
 
+// Writes `clip` as PREFIX.obj and PREFIX.pc2; false with a message on a failed write.
+bool write_cache(const FrameSequence& clip, const std::string& prefix) {
+  std::FILE* obj = std::fopen((prefix + ".obj").c_str(), "wb");
+  if (!obj) return false;
+  bool ok = true;
+  for (size_t v = 0; v < clip.vertex_count; ++v) {
+    const float* p = clip.frame(0) + v * 3;
+    ok = ok && std::fprintf(obj, "v %.9g %.9g %.9g\n", p[0], p[1], p[2]) > 0;
+  }
+  for (size_t t = 0; t < clip.triangle_count(); ++t)
+    ok = ok && std::fprintf(obj, "f %u %u %u\n", clip.triangles[t * 3] + 1, clip.triangles[t * 3 + 1] + 1,
+                            clip.triangles[t * 3 + 2] + 1) > 0;
+  ok = std::fclose(obj) == 0 && ok;
+  std::FILE* pc2 = std::fopen((prefix + ".pc2").c_str(), "wb");
+  if (!pc2) return false;
+  // PC2: "POINTCACHE2\0", version 1, points, start frame, sample rate (frames per sample), samples; then the points.
+  const int32_t version = 1, points = int32_t(clip.vertex_count), samples = int32_t(clip.frame_count);
+  const float start = 0, rate = 1;
+  ok = std::fwrite("POINTCACHE2", 1, 12, pc2) == 12 && ok;
+  for (const void* field : {static_cast<const void*>(&version), static_cast<const void*>(&points)})
+    ok = std::fwrite(field, 4, 1, pc2) == 1 && ok;
+  for (const void* field : {static_cast<const void*>(&start), static_cast<const void*>(&rate)})
+    ok = std::fwrite(field, 4, 1, pc2) == 1 && ok;
+  ok = std::fwrite(&samples, 4, 1, pc2) == 1 && ok;
+  ok = std::fwrite(clip.positions.data(), sizeof(float), clip.positions.size(), pc2) == clip.positions.size() && ok;
+  return std::fclose(pc2) == 0 && ok;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   size_t vertices = 0, frames = 0;
+  std::string cache;
   CodecSettings settings;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -127,8 +161,10 @@ int main(int argc, char** argv) {
       settings.mode = RateMode::error, settings.target = std::atof(argv[++i]);
     else if (i + 1 < argc && arg == "--bpvf")
       settings.mode = RateMode::bpvf, settings.target = std::atof(argv[++i]);
+    else if (i + 1 < argc && arg == "--write-cache")
+      cache = argv[++i];
     else {
-      std::fprintf(stderr, "usage: codec_scaling --vertices V --frames F [--error E | --bpvf R]\n");
+      std::fprintf(stderr, "usage: codec_scaling --vertices V --frames F [--error E | --bpvf R | --write-cache PREFIX]\n");
       return 2;
     }
   }
@@ -143,6 +179,11 @@ int main(int argc, char** argv) {
   const double generate_ms = milliseconds_since(start);
   const FrameSequence& clip = clips[0];
   const long input_kb = peak_rss_kb();
+  if (!cache.empty()) {
+    if (write_cache(clip, cache)) return 0;
+    std::fprintf(stderr, "codec_scaling: cannot write %s.obj and %s.pc2\n", cache.c_str(), cache.c_str());
+    return 1;
+  }
 
   // The container's base mesh work: Draco encoding, decoding, and the map from decoded to original vertices.
   bool peak_reset = reset_peak_rss();

@@ -241,6 +241,11 @@ AccessorWriter::AccessorWriter(tinygltf::Model& model) : model_(model) {
   buffer_ = int(model_.buffers.size()) - 1;
 }
 
+void AccessorWriter::reserve(size_t bytes) {
+  std::vector<unsigned char>& buffer = model_.buffers[size_t(buffer_)].data;
+  buffer.reserve(buffer.size() + bytes);
+}
+
 int AccessorWriter::add_view(const void* data, size_t bytes, int target) {
   std::vector<unsigned char>& buffer = model_.buffers[size_t(buffer_)].data;
   buffer.resize((buffer.size() + 3) / 4 * 4, 0);  // 4-byte alignment for every component type

@@ -64,6 +64,9 @@ class AccessorWriter {
                             int target);
   // A bufferView holding `bytes` (for data an extension refers to).
   int add_view(const void* data, size_t bytes, int target);
+  // Room for `bytes` more in the buffer: a writer that knows about how much it will add grows the buffer once,
+  // where growing by doubling copies it, holding both copies for a moment, at each step.
+  void reserve(size_t bytes);
 
  private:
 

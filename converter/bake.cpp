@@ -1,5 +1,6 @@
 #include "bake.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -274,9 +275,10 @@ void rebuild_channels(tinygltf::Model& model, const Scene& scene, const std::vec
 // read only the nodes' clip times and frame counts.
 Status bake_nodes(tinygltf::Model& model, const Scene& scene, size_t count,
                   const std::function<Status(size_t i, const SampledNode*& node)>& next,
-                  const std::function<void(size_t i)>& done) {
+                  const std::function<void(size_t i)>& done, size_t expected_bytes) {
   SEGMORPH_RETURN_IF_ERROR(check_references(model));
   AccessorWriter writer(model);
+  writer.reserve(expected_bytes);
   const std::vector<std::vector<bool>> members = scene_members(model);
   Baked baked;
   baked.host.assign(model.nodes.size(), -1);
@@ -301,10 +303,10 @@ Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<
         node = &sampled[i];
         return Status::Ok();
       },
-      {});
+      {}, 0);
 }
 
-Status bake_model(tinygltf::Model& model, const Scene& scene, const NodeSampler& sample) {
+Status bake_model(tinygltf::Model& model, const Scene& scene, const NodeSampler& sample, size_t expected_bytes) {
   std::vector<SampledNode> nodes(scene.animated.size());
   return bake_nodes(
       model, scene, nodes.size(),
@@ -315,7 +317,35 @@ Status bake_model(tinygltf::Model& model, const Scene& scene, const NodeSampler&
       [&](size_t i) {  // the frames go; the clips' times and frame counts stay for the channels
         for (SampledPrimitive& primitive : nodes[i].primitives)
           for (FrameSequence& clip : primitive.clips) std::vector<float>().swap(clip.positions);
-      });
+      },
+      expected_bytes);
+}
+
+size_t baked_bytes(const tinygltf::Model& model, const Scene& scene, const SampleSettings& settings) {
+  size_t bytes = 0;
+  for (const AnimatedNode& node : scene.animated) {
+    size_t frames = 0;
+    for (int clip : node.clips) frames += frame_times(scene, model, node, clip, settings).size();
+    for (const tinygltf::Primitive& primitive : model.meshes[size_t(node.mesh)].primitives) {
+      // An attribute's element count, as far as its bufferView holds them (a damaged file reserves no more than it
+      // has; reading it fails later, with the reason).
+      const auto count = [&](const char* name) -> size_t {
+        const auto found = primitive.attributes.find(name);
+        if (found == primitive.attributes.end() || found->second < 0 || size_t(found->second) >= model.accessors.size())
+          return 0;
+        const tinygltf::Accessor& accessor = model.accessors[size_t(found->second)];
+        const unsigned char* data = nullptr;
+        size_t size = 0;
+        const size_t element = size_t(bytes_of_component(accessor.componentType) * components_of_type(accessor.type));
+        if (element == 0 || !buffer_view_bytes(model, accessor.bufferView, name, &data, &size).ok()) return 0;
+        return std::min(accessor.count, size / element);
+      };
+      const size_t vertices = count("POSITION"), normals = count("NORMAL") ? 1 : 0;
+      bytes += vertices * 4 * (3 + 3 * normals + (count("TANGENT") ? 4 : 0));  // the base
+      bytes += (frames > 0 ? frames - 1 : 0) * vertices * 4 * 3 * (1 + normals);
+    }
+  }
+  return bytes + bytes / 16 + (size_t(1) << 20);
 }
 
 }  // namespace segmorph

@@ -33,9 +33,16 @@ Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<
 
 // The same bake, sampling one node at a time: sample(i, node) fills node i of scene.animated (from `model` as it is
 // then: the nodes before it baked, its own data untouched) just before it is baked, and its frames are released
-// after, so that the frames of one node are held at a time rather than the whole file's.
+// after, so that the frames of one node are held at a time rather than the whole file's. `expected_bytes` (see
+// baked_bytes) grows the buffer once to hold what the bake adds.
 using NodeSampler = std::function<Status(size_t i, SampledNode& node)>;
-Status bake_model(tinygltf::Model& model, const Scene& scene, const NodeSampler& sample);
+Status bake_model(tinygltf::Model& model, const Scene& scene, const NodeSampler& sample, size_t expected_bytes = 0);
+
+// At least what bake_model adds to the buffer of `model` when its animated nodes are sampled with `settings`: per
+// primitive, the base POSITION, NORMAL and TANGENT and one POSITION (and NORMAL) delta per frame after the first,
+// as floats, whether or not a delta turns out to be all zero; then a sixteenth more and 1 MB for the channels'
+// keys, the views' alignment and the rest (room reserved and never written costs no memory).
+size_t baked_bytes(const tinygltf::Model& model, const Scene& scene, const SampleSettings& settings);
 
 // The index, in the file it was baked from, of a node bake_model wrote (extras.segmorph.source_node), or -1.
 int source_node(const tinygltf::Node& node);

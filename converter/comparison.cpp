@@ -62,6 +62,22 @@ std::vector<AnimatedNode> mesh_nodes(const tinygltf::Model& model, const Scene& 
   return nodes;
 }
 
+// The errors of `other` (the reference's clips sampled at the same times, its vertices in any order) against
+// `reference`, vertex v of the reference paired with vertex match[v] of the other.
+ErrorMetrics paired_metrics(const std::vector<FrameSequence>& reference, const std::vector<FrameSequence>& other,
+                            const std::vector<uint32_t>& match) {
+  ErrorAccumulator accumulator;
+  for (size_t c = 0; c < reference.size(); ++c) {
+    FrameSequence matched = reference[c];
+    for (size_t f = 0; f < matched.frame_count; ++f)
+      for (size_t v = 0; v < matched.vertex_count; ++v)
+        for (int k = 0; k < 3; ++k)
+          matched.frame(f)[v * 3 + size_t(k)] = other[c].frame(f)[size_t(match[v]) * 3 + size_t(k)];
+    accumulator.add(reference[c], matched);
+  }
+  return accumulator.result();
+}
+
 // The node of `nodes` that bake wrote from the reference's node `node` (extras.segmorph.source_node), or null.
 const AnimatedNode* baked_from(int node, const tinygltf::Model& model, const std::vector<AnimatedNode>& nodes) {
   for (const AnimatedNode& candidate : nodes)
@@ -235,20 +251,11 @@ void compare_node(const ComparisonInputs& in, const SampledNode& want, NodeCompa
       out.new_matches.push_back({{node.node, p}, match_vertices(a, b)});
       match = &out.new_matches.back().second;
     }
-    ErrorAccumulator accumulator;
-    for (size_t c = 0; c < a.size(); ++c) {
-      FrameSequence matched = a[c];
-      for (size_t f = 0; f < matched.frame_count; ++f)
-        for (size_t v = 0; v < matched.vertex_count; ++v)
-          for (int k = 0; k < 3; ++k)
-            matched.frame(f)[v * 3 + size_t(k)] = b[c].frame(f)[size_t((*match)[v]) * 3 + size_t(k)];
-      accumulator.add(a[c], matched);
-    }
     PrimitiveComparison compared;
     compared.node = node.node, compared.mesh = node.mesh, compared.primitive = int(p);
     compared.other_node = pairs[p].first->node, compared.other_mesh = pairs[p].first->mesh;
     compared.other_primitive = int(pairs[p].second);
-    compared.metrics = accumulator.result();
+    compared.metrics = paired_metrics(a, b, *match);
     out.primitives.push_back(compared);
   }
 }
@@ -290,6 +297,77 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
           std::max(result.worst.max_error_over_diagonal, metrics.max_error_over_diagonal);
     }
   }
+  return Status::Ok();
+}
+
+namespace {
+
+// Positions of primitive `primitive` of node `node`'s mesh moved by the node's global transforms at `times` of
+// `clip` (one frame of the static pose when clip is null): one clip of the primitive in model space.
+Status moved_primitive(const tinygltf::Model& model, const NodeGraph& graph, int node, int primitive, const Clip* clip,
+                       const std::vector<float>& times, FrameSequence& out) {
+  const tinygltf::Mesh& mesh = model.meshes[size_t(model.nodes[size_t(node)].mesh)];
+  const std::string what = "node " + std::to_string(node) + " primitive " + std::to_string(primitive);
+  if (size_t(primitive) >= mesh.primitives.size()) return Status(StatusCode::bad_data, what + " does not exist");
+  SampledPrimitive rest;
+  SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, mesh.primitives[size_t(primitive)], what, rest));
+  out = FrameSequence();
+  out.vertex_count = rest.rest_positions.size() / 3;
+  out.times = clip ? times : std::vector<float>{0.0f};
+  out.frame_count = out.times.size();
+  out.positions.resize(out.frame_count * out.vertex_count * 3);
+  std::vector<Eigen::Matrix4d> global;
+  for (size_t f = 0; f < out.frame_count; ++f) {
+    evaluate_global_transforms(model, graph, clip, out.times[f], global);
+    const Eigen::Matrix4d& transform = global[size_t(node)];
+    for (size_t v = 0; v < out.vertex_count; ++v) {
+      const float* p = &rest.rest_positions[v * 3];
+      const Eigen::Vector4d moved = transform * Eigen::Vector4d(p[0], p[1], p[2], 1.0);
+      for (int k = 0; k < 3; ++k) out.frame(f)[v * 3 + size_t(k)] = float(moved[k]);
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status compare_rigid_primitive(const tinygltf::Model& reference_model, const Scene& reference_scene,
+                               const tinygltf::Model& other_model, const Scene& other_scene, int node, int primitive,
+                               ErrorMetrics& metrics) {
+  for (const tinygltf::Model* model : {&reference_model, &other_model})
+    if (node < 0 || size_t(node) >= model->nodes.size() || model->nodes[size_t(node)].mesh < 0)
+      return Status(StatusCode::bad_data, "node " + std::to_string(node) + " has no mesh in both files");
+  // The clips that move the node: a translation, rotation or scale track of it or of an ancestor.
+  std::vector<bool> moves(reference_model.nodes.size(), false);
+  for (int n = node; n >= 0; n = reference_scene.graph.parent[size_t(n)]) moves[size_t(n)] = true;
+  std::vector<FrameSequence> reference, other;
+  for (size_t c = 0; c < reference_scene.clips.size(); ++c) {
+    std::vector<float> keys;
+    for (const Track& track : reference_scene.clips[c].tracks)
+      if (track.path != TargetPath::weights && moves[size_t(track.node)])
+        keys.insert(keys.end(), track.curve.times.begin(), track.curve.times.end());
+    if (keys.empty()) continue;
+    const int counterpart = counterpart_clip(reference_scene, int(c), other_scene);
+    if (counterpart < 0)
+      return Status(StatusCode::bad_data, "the encoded file has no animation for " + reference_scene.clips[c].name);
+    const std::vector<float> times = sampling_times(std::move(keys), SampleSettings());
+    reference.emplace_back(), other.emplace_back();
+    SEGMORPH_RETURN_IF_ERROR(moved_primitive(reference_model, reference_scene.graph, node, primitive,
+                                             &reference_scene.clips[c], times, reference.back()));
+    SEGMORPH_RETURN_IF_ERROR(moved_primitive(other_model, other_scene.graph, node, primitive,
+                                             &other_scene.clips[size_t(counterpart)], times, other.back()));
+  }
+  if (reference.empty()) {  // nothing moves it: its rest pose
+    reference.emplace_back(), other.emplace_back();
+    SEGMORPH_RETURN_IF_ERROR(
+        moved_primitive(reference_model, reference_scene.graph, node, primitive, nullptr, {}, reference.back()));
+    SEGMORPH_RETURN_IF_ERROR(
+        moved_primitive(other_model, other_scene.graph, node, primitive, nullptr, {}, other.back()));
+  }
+  if (reference[0].vertex_count == 0 || other[0].vertex_count == 0)
+    return Status(StatusCode::bad_data,
+                  "node " + std::to_string(node) + " primitive " + std::to_string(primitive) + " has no vertices");
+  metrics = paired_metrics(reference, other, match_vertices(reference, other));
   return Status::Ok();
 }
 

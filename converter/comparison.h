@@ -55,4 +55,13 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
                          const Scene& other_scene, AnimationComparison& result, bool encoded_from_reference = false,
                          VertexMatches* matches = nullptr, size_t threads = 1);
 
+// The errors of primitive `primitive` of the mesh of node `node` in `other_model`, segmorph's encode of the reference
+// (decoded), whose nodes keep their indices, for a mesh that moves rigidly with its node (encode's "rigid" meshes,
+// which analyze_scene does not sample): its positions in model space at the key times (as sampling_times takes them)
+// of every clip that moves the node or an ancestor (the rest pose when none does), vertices paired by trajectory
+// (Draco reorders them). The KG error divides by the part's own spread.
+Status compare_rigid_primitive(const tinygltf::Model& reference_model, const Scene& reference_scene,
+                               const tinygltf::Model& other_model, const Scene& other_scene, int node, int primitive,
+                               ErrorMetrics& metrics);
+
 }  // namespace segmorph

@@ -220,10 +220,19 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
       primitive.bytes = coded_bytes(encoded.model, mesh, int(p));
       for (size_t n = 0; n < encoded.model.nodes.size() && primitive.error.node < 0; ++n)
         if (encoded.model.nodes[n].mesh == mesh) primitive.error.node = int(n);
-      if (primitive.error.node >= 0) primitive.error.node_name = encoded.model.nodes[size_t(primitive.error.node)].name;
-      const auto position = encoded.model.meshes[size_t(mesh)].primitives[p].attributes.find("POSITION");
-      if (position != encoded.model.meshes[size_t(mesh)].primitives[p].attributes.end())
-        primitive.error.vertices = encoded.model.accessors[size_t(position->second)].count;
+      if (primitive.error.node < 0) continue;  // moving_meshes takes only meshes that nodes use
+      primitive.error.node_name = encoded.model.nodes[size_t(primitive.error.node)].name;
+      ErrorMetrics metrics;
+      status = compare_rigid_primitive(file.model, file.scene, decoded.model, decoded.scene, primitive.error.node,
+                                       int(p), metrics);
+      if (!status.ok())
+        return Status(StatusCode::internal, "measuring the encode's rigid mesh " + std::to_string(mesh) +
+                                                " against the input: " + status.message());
+      primitive.measured = true;
+      primitive.error.vertices = metrics.vertices, primitive.error.frames = metrics.frames;
+      primitive.error.kg_percent = metrics.kg_percent;
+      primitive.error.rmse_over_diagonal = metrics.rmse_over_diagonal;
+      primitive.error.max_error_over_diagonal = metrics.max_error_over_diagonal;
       report.primitives.push_back(primitive);
     }
   report.kg_percent = comparison.worst.kg_percent;

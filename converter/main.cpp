@@ -181,7 +181,7 @@ std::string primitive_error_json(const PrimitiveError& primitive) {
   return "{\"node\":" + std::to_string(primitive.node) + ",\"node_name\":" + json_string(primitive.node_name) + figures;
 }
 
-// encode's primitives as a JSON array: the input's animated primitives, then the rigid meshes (no error figures).
+// encode's primitives as a JSON array: the input's animated primitives, then the rigid meshes.
 std::string encoded_primitives_json(const EncodeReport& report) {
   std::string json = "[";
   for (const EncodedPrimitive& primitive : report.primitives) {
@@ -210,9 +210,10 @@ std::string encoded_primitives_text(const EncodeReport& report) {
     char line[512];
     const PrimitiveError& e = primitive.error;
     if (primitive.measured)
-      std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu frames, %zu clusters, %zu bytes, KG %.4f %%\n",
+      std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu frames, %zu clusters, %zu bytes, KG %.4f %%%s\n",
                     primitive_label(e).c_str(), mode_name(primitive.mode), e.vertices, e.frames, primitive.clusters,
-                    primitive.bytes, e.kg_percent);
+                    primitive.bytes, e.kg_percent,
+                    primitive.mode == PrimitiveMode::rigid ? " of the part alone (not in the file's KG)" : "");
     else
       std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu bytes\n", primitive_label(e).c_str(),
                     mode_name(primitive.mode), e.vertices, primitive.bytes);

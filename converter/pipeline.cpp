@@ -80,9 +80,16 @@ bool writes_over(const std::string& output, const std::string& input_path, const
 
 Status analyze_model(const tinygltf::Model& model, const SampleSettings& settings, bool sample,
                      const Progress& progress, SampledFile& file) {
-  file.model = model;
+  tinygltf::Model copy = model;
+  return analyze_model(std::move(copy), settings, sample, progress, file);
+}
+
+Status analyze_model(tinygltf::Model&& model, const SampleSettings& settings, bool sample, const Progress& progress,
+                     SampledFile& file) {
+  file.model = std::move(model);
   SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(file.model, &file.decoded));
   SEGMORPH_RETURN_IF_ERROR(analyze_scene(file.model, file.scene));
+  SEGMORPH_RETURN_IF_ERROR(check_frame_counts(file.model, file.scene, settings));
   if (!sample) return Status::Ok();
   const Scene& scene = file.scene;
   file.sampled.resize(scene.animated.size());
@@ -151,13 +158,14 @@ Status info(const Model& model, const SampleSettings& settings, InfoReport& repo
 }
 
 Status bake(Model& model, const SampleSettings& settings, BakeReport* report, const Progress& progress) {
-  // Each node is sampled just before it is baked: the frames of one node are held at a time.
-  SampledFile file;
-  SEGMORPH_RETURN_IF_ERROR(analyze_model(model.data().gltf, settings, false, progress, file));
-  const Scene& scene = file.scene;
+  // The model is baked in place (a copy would hold the input twice), and each node is sampled just before it is
+  // baked: the frames of one node are held at a time.
   BakeReport local;
   BakeReport& out = report ? *report : local;
   out = BakeReport();
+  SampledFile file;
+  Status status = analyze_model(std::move(model.data().gltf), settings, false, progress, file);
+  const Scene& scene = file.scene;
   out.nodes = scene.animated.size();
   auto sample = [&](size_t i, SampledNode& node) {
     report_progress(progress, "sampling and baking " + node_name(file.model, scene.animated[i].node) + " (" +
@@ -166,10 +174,10 @@ Status bake(Model& model, const SampleSettings& settings, BakeReport* report, co
     for (const FrameSequence& clip : node.primitives[0].clips) out.frames += clip.frame_count;
     return Status::Ok();
   };
-  SEGMORPH_RETURN_IF_ERROR(bake_model(file.model, scene, sample));
-  name_generator(file.model);
-  model.data().gltf = std::move(file.model);
-  return Status::Ok();
+  if (status.ok()) status = bake_model(file.model, scene, sample, baked_bytes(file.model, scene, settings));
+  if (status.ok()) name_generator(file.model);
+  model.data().gltf = status.ok() ? std::move(file.model) : tinygltf::Model();
+  return status;
 }
 
 Status encode(const Model& input, const EncodeSettings& settings, Model& output, EncodeReport* report,

@@ -29,7 +29,9 @@ struct SampledFile {
   SampledFile& operator=(const SampledFile&) = delete;
 };
 
-// `file` from a copy of `model`: decoded, its animated nodes found, and, when `sample` is true, sampled.
+// `file` from `model` (moved in, or a copy): decoded, its animated nodes found, and, when `sample` is true, sampled.
+Status analyze_model(tinygltf::Model&& model, const SampleSettings& settings, bool sample, const Progress& progress,
+                     SampledFile& file);
 Status analyze_model(const tinygltf::Model& model, const SampleSettings& settings, bool sample,
                      const Progress& progress, SampledFile& file);
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 
 #include "accessor.h"
 
@@ -220,6 +221,30 @@ std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model,
   for_each_moving_track(model, scene.graph, node, scene.clips[size_t(clip)], [&](const Track& track) {
     keys.insert(keys.end(), track.curve.times.begin(), track.curve.times.end());
   });
+  return sampling_times(std::move(keys), settings);
+}
+
+Status check_frame_counts(const tinygltf::Model& model, const Scene& scene, const SampleSettings& settings) {
+  if (!(settings.fps > 0)) return Status::Ok();
+  for (const AnimatedNode& node : scene.animated)
+    for (int c : node.clips) {
+      double start = INFINITY, end = -INFINITY;
+      for_each_moving_track(model, scene.graph, node, scene.clips[size_t(c)], [&](const Track& track) {
+        if (track.curve.times.empty()) return;
+        start = std::min(start, double(track.curve.times.front()));
+        end = std::max(end, double(track.curve.times.back()));
+      });
+      if (!(end >= start) || (end - start) * settings.fps <= SampleSettings::kMaxGridFrames) continue;
+      char line[200];
+      std::snprintf(line, sizeof(line), ": its keys span %g s, %.3g frames at --fps %g, above the %g a clip may have",
+                    end - start, (end - start) * settings.fps, settings.fps, SampleSettings::kMaxGridFrames);
+      return Status(StatusCode::invalid_argument,
+                    node_label(model, node.node) + " in " + scene.clips[size_t(c)].name + line);
+    }
+  return Status::Ok();
+}
+
+std::vector<float> sampling_times(std::vector<float> keys, const SampleSettings& settings) {
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   if (keys.empty()) return keys;

@@ -74,9 +74,20 @@ struct SampledNode {
   std::vector<SampledPrimitive> primitives;
 };
 
-// Frame times of `node` in clip `clip` (an index into scene.clips).
+// Frame times of `node` in clip `clip` (an index into scene.clips): sampling_times of the keys of the tracks that
+// move it.
 std::vector<float> frame_times(const Scene& scene, const tinygltf::Model& model, const AnimatedNode& node, int clip,
                                const SampleSettings& settings);
+
+// Refuses, naming the node and clip, a sampling at settings.fps that would give a clip more than
+// SampleSettings::kMaxGridFrames frames (a key hours away from the others). Without fps the frames are the keys,
+// or a grid coarser than them.
+Status check_frame_counts(const tinygltf::Model& model, const Scene& scene, const SampleSettings& settings);
+
+// The times to sample at from the key times `keys` of the tracks that move something: the keys (sorted, each once)
+// while they come at most SampleSettings::kMaxKeyRate a second, else a regular grid at kDefaultFps from the first
+// to the last; with settings.fps, always a grid at that rate. Empty without keys.
+std::vector<float> sampling_times(std::vector<float> keys, const SampleSettings& settings);
 
 // Samples every primitive of `node` over its clips. Positions are in the node's mesh space for morph-only
 // nodes and in model (world) space for skinned ones, as glTF renders them. `clip_times`, when given, holds

@@ -179,5 +179,49 @@ TEST(CompareAnimation, AFileWithoutTheAnimationIsBadData) {
   EXPECT_NE(compared.status.message().find("Wave again"), std::string::npos) << compared.status.message();
 }
 
+// A mesh that moves rigidly with its node (encode's "rigid" meshes), measured in model space at the key times of
+// the clips that move the node or an ancestor. The node (static translation (5, 0, 0)) is a child of a node that
+// "Walk" moves along x by (0, 0, 0), (1, 0, 0), (2, 0, 0) at t = 0, 1, 2; "Blink" moves another node only.
+// Vertices (0, 0, 0) (2, 0, 0) (0, 2, 0) (0, 0, 2): centroid (0.5, 0.5, 0.5), Σ |p − c|² = 0.75 + 3 × 2.75 = 9 in
+// every frame (a translation keeps it), 27 over the 3 frames. The other file has the vertices in reverse order, the
+// last one 0.1 higher in z, and Walk's middle key at 1.2: squared errors 0.01 (t = 0), 3 × 0.04 + 0.05 (t = 1) and
+// 0.01 (t = 2), 0.19 in all. KG = 100 × sqrt(0.19 / 27) = 8.38870 %; the largest error sqrt(0.05) = 0.223607.
+tinygltf::Model rigid_model(const std::vector<float>& positions, float middle_key) {
+  GltfBuilder gltf;
+  const int parent = gltf.add_node();
+  const int mesh = gltf.add_mesh(gltf.add_vec3(positions));
+  const int rigid = gltf.add_mesh_node(mesh);
+  gltf.model.nodes[size_t(rigid)].translation = {5, 0, 0};
+  gltf.add_child(parent, rigid);
+  gltf.add_root(parent);
+  const int other = gltf.add_node();
+  gltf.add_root(other);
+  gltf.add_channel(gltf.add_animation("Blink"), other, "translation", {0, 0.5f, 4}, {0, 0, 0, 0, 1, 0, 0, 0, 0});
+  gltf.add_channel(gltf.add_animation("Walk"), parent, "translation", {0, 1, 2}, {0, 0, 0, middle_key, 0, 0, 2, 0, 0});
+  return gltf.model;
+}
+
+TEST(CompareRigidPrimitive, MeasuresModelSpaceOverTheClipsThatMoveTheNode) {
+  const tinygltf::Model reference = rigid_model({0, 0, 0, 2, 0, 0, 0, 2, 0, 0, 0, 2}, 1);
+  const tinygltf::Model other = rigid_model({0, 0, 2.1f, 0, 2, 0, 2, 0, 0, 0, 0, 0}, 1.2f);
+  Scene reference_scene, other_scene;
+  ASSERT_TRUE(IsOk(load_clip(reference, 0, reference_scene.clips.emplace_back())));
+  ASSERT_TRUE(IsOk(load_clip(reference, 1, reference_scene.clips.emplace_back())));
+  ASSERT_TRUE(IsOk(build_node_graph(reference, reference_scene.graph)));
+  ASSERT_TRUE(IsOk(load_clip(other, 0, other_scene.clips.emplace_back())));
+  ASSERT_TRUE(IsOk(load_clip(other, 1, other_scene.clips.emplace_back())));
+  ASSERT_TRUE(IsOk(build_node_graph(other, other_scene.graph)));
+  ErrorMetrics metrics;
+  ASSERT_TRUE(IsOk(compare_rigid_primitive(reference, reference_scene, other, other_scene, 1, 0, metrics)));
+  EXPECT_EQ(metrics.vertices, 4u);
+  EXPECT_EQ(metrics.frames, 3u) << "Walk's three keys; Blink does not move the node";
+  EXPECT_NEAR(metrics.kg_percent, 8.38870, 1e-4);
+  EXPECT_NEAR(metrics.max_error, 0.223607, 1e-5);
+  ASSERT_TRUE(IsOk(compare_rigid_primitive(reference, reference_scene, reference, reference_scene, 1, 0, metrics)));
+  EXPECT_EQ(metrics.kg_percent, 0);
+  EXPECT_FALSE(compare_rigid_primitive(reference, reference_scene, other, other_scene, 0, 0, metrics).ok())
+      << "node 0 has no mesh";
+}
+
 }  // namespace
 }  // namespace segmorph

@@ -96,6 +96,23 @@ TEST(SamplingFrameTimes, FpsSettingForcesARegularGrid) {
             (std::vector<float>{0, 0.25f, 0.5f, 0.75f, 1}));
 }
 
+// A key 1e9 s after the others at --fps 30 is 3e10 frames: refused up front, naming the node and clip (before, the
+// grid was built, and sampling hung). Without --fps the frames are the keys; at a rate the span allows, a grid.
+TEST(SamplingFrameTimes, AGridOfMoreFramesThanAClipMayHaveIsRefused) {
+  GltfBuilder gltf;
+  const int node = add_morph_node(gltf);
+  gltf.add_channel(gltf.add_animation("Forever"), node, "weights", {0, 1e9f}, {0, 0, 1, 0});
+  Scene scene;
+  ASSERT_TRUE(IsOk(analyze_scene(gltf.model, scene)));
+  const Status refused = check_frame_counts(gltf.model, scene, at_fps(30));
+  EXPECT_EQ(refused.code(), StatusCode::invalid_argument);
+  EXPECT_NE(refused.message().find("in Forever: its keys span 1e+09 s, 3e+10 frames at --fps 30"), std::string::npos)
+      << refused.message();
+  EXPECT_TRUE(IsOk(check_frame_counts(gltf.model, scene, {})));
+  EXPECT_EQ(frame_times(scene, gltf.model, scene.animated[0], 0, {}), (std::vector<float>{0, 1e9f}));
+  EXPECT_TRUE(IsOk(check_frame_counts(gltf.model, scene, at_fps(1e-3))));  // 1e6 frames: the limit
+}
+
 // ----- analyze_scene ---------------------------------------------------------------------------------------
 
 TEST(SamplingAnalyze, FileWithoutAnimationIsNothingToDo) {

@@ -12,7 +12,7 @@ const finite = (x) => typeof x === 'number' && Number.isFinite(x);
 export function checkQuick(parts, doc, chartDir) {
   const problems = [];
   const expect = (condition, message) => { if (!condition) problems.push(message); };
-  for (const name of ['rd', 'speed', 'scaling']) expect(parts[name], `no results for the ${name} part`);
+  for (const name of ['rd', 'speed', 'scaling', 'large']) expect(parts[name], `no results for the ${name} part`);
 
   for (const file of parts.rd?.files ?? []) {
     expect(file.shape && file.shape.vertex_frames > 0, `${file.label}: no vertex-frame count`);
@@ -43,6 +43,15 @@ export function checkQuick(parts, doc, chartDir) {
       expect(run.wall_ms > 0 && run.cpu_ms >= 0 && run.max_rss_kb > 0, `${file.label}: ${name} has no time or memory`);
     for (const stage of ['segmentation', 'motion', 'prediction', 'rate_control', 'entropy', 'draco'])
       expect(finite(m.encode.stages[stage]), `${file.label}: encode reports no ${stage} time`);
+  }
+  for (const { label, result: m } of parts.large?.files ?? []) {
+    expect(!m.failed, `${label}: large: ${m.failed}`);
+    if (m.failed) continue;
+    for (const [name, run] of Object.entries({ encode: m.encode, bake: m.bake, gltfpack: m.gltfpack }))
+      expect(run.wall_ms > 0 && run.cpu_ms >= 0 && run.max_rss_kb > 0, `${label}: large: ${name} has no time or memory`);
+    expect(m.modes.kept_skin > 1 && m.vertex_frames > 0, `${label}: large: modes ${JSON.stringify(m.modes)}, ${m.vertex_frames} vertex-frames`);
+    expect(m.encode.bytes.brotli > 0 && m.gltfpack.bytes.brotli > 0 && m.bake.bytes > m.input_bytes, `${label}: large: sizes`);
+    expect(finite(m.encode.kg) && m.encode.kg > 0 && m.encode.kg <= 0.15, `${label}: large: encode KG ${m.encode.kg} %`);
   }
   for (const { label, stages } of parts.speed?.codec ?? []) {
     expect(!stages.failed, `${label}: ${stages.failed}`);

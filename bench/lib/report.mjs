@@ -278,6 +278,42 @@ function speedAndMemory(speed, shapes, charts, lines, flags) {
   print();
 }
 
+// Large skinned files, whole commands (bench/lib/large.mjs).
+function largePart(large, lines, flags) {
+  const print = (line = '') => lines.push(line);
+  print('## Large skinned files');
+  print();
+  print('Production-size skinned characters, whole commands, each run ' + large.repeats + ' times (median wall and CPU ' +
+        'time, largest peak memory): shared samples as they are, and files written from one (FILE × N) with its skinned ' +
+        'mesh copied into N primitives of their own (each copy\'s positions moved by copy × 0.1 % of the mesh\'s extent, ' +
+        'so that no tool merges them: a character split by material, as game assets are; bench/lib/large.mjs). ' +
+        `segmorph \`encode --error ${SPEED_ERROR}\` keeps the skins and searches for the tracks' ` +
+        'precision (encode\'s KG is measured on its decoded result); segmorph `bake` writes every frame as morph targets ' +
+        `(what a runtime without skinning needs); gltfpack \`-cc -af 0 -vp ${SPEED_GLTFPACK_BITS}\` on the same input. ` +
+        'Bytes after `brotli -q 11` (raw in brackets).');
+  print();
+  print('| file | primitives (modes) | V × F | input | encode wall (CPU) | encode peak | encode KG | encode bytes | bake wall (CPU) | bake peak | baked | gltfpack wall (CPU) | gltfpack peak | gltfpack bytes | encode / gltfpack wall |');
+  print('|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|');
+  const kB = (bytes) => `${(bytes / 1000).toFixed(1)} kB`;
+  const mB = (bytes) => `${(bytes / 1e6).toFixed(1)} MB`;
+  for (const { label, result: m } of large.files) {
+    if (m.failed) { flags.push(`${label}, large: ${m.failed}`); print(`| ${label} | failed: ${m.failed} |`); continue; }
+    const count = Object.values(m.modes).reduce((a, b) => a + b, 0);
+    const modes = Object.entries(m.modes).map(([mode, n]) => `${n} ${mode.replace('_', ' ')}`).join(', ');
+    print(`| ${label} | ${count} (${modes}) | ${(m.vertex_frames / 1e6).toFixed(2)} M | ${mB(m.input_bytes)} | ` +
+          `${seconds(m.encode.wall_ms)} (${seconds(m.encode.cpu_ms)}) s | ${mb(m.encode.max_rss_kb)} MB | ${kgText(m.encode.kg)} | ` +
+          `${kB(m.encode.bytes.brotli)} (${kB(m.encode.bytes.raw)}) | ${seconds(m.bake.wall_ms)} (${seconds(m.bake.cpu_ms)}) s | ` +
+          `${mb(m.bake.max_rss_kb)} MB | ${mB(m.bake.bytes)} | ${seconds(m.gltfpack.wall_ms)} (${seconds(m.gltfpack.cpu_ms)}) s | ` +
+          `${mb(m.gltfpack.max_rss_kb)} MB | ${kB(m.gltfpack.bytes.brotli)} (${kB(m.gltfpack.bytes.raw)}) | ` +
+          `${(m.encode.wall_ms / m.gltfpack.wall_ms).toFixed(1)}× |`);
+    if (!(m.encode.kg <= SPEED_ERROR)) flags.push(`${label}, large: encode KG ${m.encode.kg} % above the requested ${SPEED_ERROR} %`);
+  }
+  print();
+  print('V × F: vertex-frames of the animated (skinned and morphed) primitives, what bpvf counts; gltfpack\'s KG is not ' +
+        'measured here (rate and distortion above measures it on the shared samples).');
+  print();
+}
+
 // What a web page pays: bytes as delivered and load times in Chromium (bench/lib/browser.mjs).
 function browserPart(browser, lines, flags) {
   const print = (line = '') => lines.push(line);
@@ -454,6 +490,11 @@ function summary(parts, lines) {
                   `${((c.stages.DecodeApiFrames.ms / c.stages.DecodeWhole.ms - 1) * 100).toFixed(1)} %`);
     if (api.length) print(`- The runtime decoder's C API (whole clips / frame by frame) over the tool's decoder: ${api.join(', ')}.`);
   }
+  const large = (parts.large?.files ?? []).filter((f) => !f.result.failed);
+  if (large.length)
+    print('- Large skinned files, segmorph encode / bake / gltfpack, wall time and peak memory: ' + large.map(({ label, result: m }) =>
+      `${path.basename(label)} ${seconds(m.encode.wall_ms)} s ${mb(m.encode.max_rss_kb)} MB / ${seconds(m.bake.wall_ms)} s ` +
+      `${mb(m.bake.max_rss_kb)} MB / ${seconds(m.gltfpack.wall_ms)} s ${mb(m.gltfpack.max_rss_kb)} MB`).join('; ') + '.');
   const web = (parts.browser?.inputs ?? []).filter((i) => !i.failed && i.segmorph.browser && i.gltfpack.browser);
   if (web.length) {
     const rate = LINKS_MBIT[0];
@@ -481,7 +522,7 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   charts.link = (name) => path.relative(path.dirname(doc), path.join(chartDir, name)).split(path.sep).join('/');
   const lines = [], flags = [];
   const print = (line = '') => lines.push(line);
-  const anyMeta = parts.rd?.meta || parts.speed?.meta || parts.scaling?.meta || parts.browser?.meta;
+  const anyMeta = parts.rd?.meta || parts.speed?.meta || parts.scaling?.meta || parts.large?.meta || parts.browser?.meta;
   print('# Benchmarks');
   print();
   print(quick ? 'The quick mode of the harness (the test suite runs it): one file, two segmorph rates, one setting per ' +
@@ -501,8 +542,8 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   print('```');
   print();
   print('It writes every file and log under `out/bench/` (`results/*.json` hold the figures), then this page and ' +
-        '`docs/bench/*.svg`. `--parts rd,speed,scaling,browser` runs some parts only (the page is rebuilt from the saved ' +
-        'results of all four); `--quick` is the test suite\'s small run (ctest `bench_quick`). Exit status 1 when a step fails ' +
+        '`docs/bench/*.svg`. `--parts rd,speed,scaling,large,browser` runs some parts only (the page is rebuilt from the ' +
+        'saved results of all five); `--quick` is the test suite\'s small run (ctest `bench_quick`). Exit status 1 when a step fails ' +
         'or a segmorph file misses its error bound.');
   print();
   if (anyMeta) {
@@ -513,7 +554,7 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
     // Each part names the revision it ran: the parts are saved, and can be run at different times.
     print(`- ${anyMeta.versions.join('; ')}.`);
     for (const [name, key] of [['Rate and distortion', 'rd'], ['Speed and memory', 'speed'], ['Scaling', 'scaling'],
-                               ['In the browser', 'browser']])
+                               ['Large skinned files', 'large'], ['In the browser', 'browser']])
       if (parts[key]) print(metaLine(name, parts[key].meta));
     print();
   }
@@ -522,6 +563,7 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   const shapes = new Map((parts.rd?.files ?? []).map((f) => [f.label, f.shape]));
   if (parts.speed) speedAndMemory(parts.speed, shapes, charts, lines, flags);
   if (parts.scaling) scalingPart(parts.scaling, charts, lines, flags);
+  if (parts.large) largePart(parts.large, lines, flags);
   if (parts.browser) browserPart(parts.browser, lines, flags);
   print('## Flags');
   print();

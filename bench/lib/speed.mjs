@@ -15,7 +15,7 @@ const median = (values) => [...values].sort((a, b) => a - b)[Math.floor((values.
 
 // Runs `args` `repeats` times; { ok, wall_ms and cpu_ms (user + system; medians), max_rss_kb (the largest),
 // stdout (the run of median wall time) }. CPU time is the steadier figure on a machine shared with other work.
-function repeated(tools, log, command, args, repeats) {
+export function repeated(tools, log, command, args, repeats) {
   const results = [];
   for (let i = 0; i < repeats; i++) {
     const result = tools.run(`${log}.${i}`, command, args);

@@ -77,6 +77,9 @@ struct SampleSettings {
   double fps = 0;
   static constexpr double kMaxKeyRate = 60;
   static constexpr double kDefaultFps = 30;
+  // The most frames a regular grid may give one clip (over 9 hours at 30 fps): a clip whose keys span longer at
+  // `fps` is refused rather than sampled into frames no memory holds.
+  static constexpr double kMaxGridFrames = 1e6;
 };
 
 // A vertex cache, read by Model::load_cache.
@@ -140,7 +143,8 @@ struct BakeReport {
 };
 
 // Replaces every animated primitive of `model` by standard morph targets, one per sampled frame, played by one
-// weights animation per clip (docs/baking.md). An encoded model is decoded first.
+// weights animation per clip (docs/baking.md). An encoded model is decoded first. The model is baked in place, so
+// that a large input is not held twice: on failure it is left empty (load it again to use it).
 Status bake(Model& model, const SampleSettings& settings, BakeReport* report = nullptr, const Progress& progress = {});
 
 // --- encode ---
@@ -212,8 +216,10 @@ struct EncodedPrimitive {
   size_t clusters = 0;                          // K of its stream (frames and kept targets)
   size_t bytes = 0;                             // its animation stream and its Draco mesh
   // The animated primitive of the input it plays, measured on the decoded encode as verify measures it. A rigid
-  // mesh is not measured (measured false; error.mesh and primitive are its output_mesh and output_primitive): its
-  // error is Draco's quantization, within half a step per axis.
+  // mesh's primitive (error.mesh and primitive are its output_mesh and output_primitive) is measured in model space
+  // at the key times of the clips that move its (first) node, its KG over the part's own spread; verify does not
+  // measure rigid meshes, and EncodeReport::kg_percent leaves them out: their Draco step is set against the scene's
+  // size, so a small part reads high on its own. measured is false only for a rigid mesh that no node uses.
   bool measured = false;
   PrimitiveError error;
 };
@@ -223,7 +229,8 @@ struct EncodeReport {
   // meshes' primitives.
   std::vector<EncodedPrimitive> primitives;
   size_t glb_bytes = 0;  // the encoded model as a .glb
-  // The worst primitive's errors, measured on the decoded encode against the input (what verify reports).
+  // The worst animated primitive's errors, measured on the decoded encode against the input (what verify reports;
+  // rigid meshes are not in it).
   double kg_percent = 0, rmse_over_diagonal = 0, max_error_over_diagonal = 0;
   std::vector<StreamReport> streams;  // one per primitive coded as frames or kept targets
   double vertex_frames = 0;           // Σ V × F over the input's animated primitives and clips (what bpvf counts)
