@@ -46,7 +46,7 @@ std::vector<std::vector<bool>> scene_members(const tinygltf::Model& model) {
 
 // The baked primitive: base frame, derived normals and tangents, one target per frame but the first.
 tinygltf::Primitive bake_primitive(const tinygltf::Primitive& original, const SampledPrimitive& sampled, bool skinned,
-                                   AccessorWriter& writer) {
+                                   bool write_frames, AccessorWriter& writer) {
   tinygltf::Primitive primitive = original;
   primitive.targets.clear();
   if (skinned)
@@ -92,6 +92,12 @@ tinygltf::Primitive bake_primitive(const tinygltf::Primitive& original, const Sa
     for (size_t f = (c == 0 ? 1 : 0); f < sampled.clips[c].frame_count; ++f) {
       const float* frame = sampled.clips[c].frame(f);
       std::map<std::string, int> target;
+      if (!write_frames) {
+        target["POSITION"] = writer.add_zeros(vertex_count, TINYGLTF_TYPE_VEC3, true);
+        if (has_normals) target["NORMAL"] = writer.add_zeros(vertex_count, TINYGLTF_TYPE_VEC3, false);
+        primitive.targets.push_back(std::move(target));
+        continue;
+      }
       for (size_t i = 0; i < delta.size(); ++i) delta[i] = frame[i] - base[i];
       target["POSITION"] = all_zero(delta) ? writer.add_zeros(vertex_count, TINYGLTF_TYPE_VEC3, true)
                                            : writer.add_floats(delta.data(), vertex_count, TINYGLTF_TYPE_VEC3, true, 0);
@@ -143,7 +149,7 @@ struct Baked {
 
 // Bakes sampled node i: a new mesh of morph targets, named after the clips' frames; a skinned node's goes on a new
 // root node (skinned vertices are in model space), an unskinned node's stays on the node.
-void bake_node(tinygltf::Model& model, const Scene& scene, const SampledNode& sampled, size_t i,
+void bake_node(tinygltf::Model& model, const Scene& scene, const SampledNode& sampled, size_t i, bool write_frames,
                const std::vector<std::vector<bool>>& members, AccessorWriter& writer, Baked& baked) {
   const AnimatedNode& node = *sampled.node;
   const bool skinned = node.skin >= 0;
@@ -158,7 +164,7 @@ void bake_node(tinygltf::Model& model, const Scene& scene, const SampledNode& sa
   baked.target_count[i] = names.size();
   mesh.extras = with_member(mesh.extras, "targetNames", tinygltf::Value(names));
   for (size_t p = 0; p < mesh.primitives.size(); ++p)
-    mesh.primitives[p] = bake_primitive(mesh.primitives[p], sampled.primitives[p], skinned, writer);
+    mesh.primitives[p] = bake_primitive(mesh.primitives[p], sampled.primitives[p], skinned, write_frames, writer);
   model.meshes.push_back(std::move(mesh));
   const int mesh_index = int(model.meshes.size()) - 1;
 
@@ -275,7 +281,7 @@ void rebuild_channels(tinygltf::Model& model, const Scene& scene, const std::vec
 // read only the nodes' clip times and frame counts.
 Status bake_nodes(tinygltf::Model& model, const Scene& scene, size_t count,
                   const std::function<Status(size_t i, const SampledNode*& node)>& next,
-                  const std::function<void(size_t i)>& done, size_t expected_bytes) {
+                  const std::function<void(size_t i)>& done, size_t expected_bytes, bool write_frames = true) {
   SEGMORPH_RETURN_IF_ERROR(check_references(model));
   AccessorWriter writer(model);
   writer.reserve(expected_bytes);
@@ -287,7 +293,7 @@ Status bake_nodes(tinygltf::Model& model, const Scene& scene, size_t count,
   std::vector<const SampledNode*> sampled(count, nullptr);
   for (size_t i = 0; i < count; ++i) {
     SEGMORPH_RETURN_IF_ERROR(next(i, sampled[i]));
-    bake_node(model, scene, *sampled[i], i, members, writer, baked);
+    bake_node(model, scene, *sampled[i], i, write_frames, members, writer, baked);
     if (done) done(i);
   }
   rebuild_channels(model, scene, sampled, baked, writer);
@@ -304,6 +310,17 @@ Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<
         return Status::Ok();
       },
       {}, 0);
+}
+
+Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<const SampledNode*>& sampled,
+                  bool write_frames) {
+  return bake_nodes(
+      model, scene, sampled.size(),
+      [&](size_t i, const SampledNode*& node) {
+        node = sampled[i];
+        return Status::Ok();
+      },
+      {}, 0, write_frames);
 }
 
 Status bake_model(tinygltf::Model& model, const Scene& scene, const NodeSampler& sample, size_t expected_bytes) {

@@ -31,6 +31,12 @@ namespace segmorph {
 // scene.animated, in that order.
 Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<SampledNode>& sampled);
 
+// The same for the nodes `sampled` points to (any of scene.animated). Without `write_frames`, each morph target is
+// an accessor of zeros without data: the form an encode replaces by a stream at once (compress_model reads the
+// baked base attributes and the clips' times, never the targets), without writing, and holding, every frame.
+Status bake_model(tinygltf::Model& model, const Scene& scene, const std::vector<const SampledNode*>& sampled,
+                  bool write_frames);
+
 // The same bake, sampling one node at a time: sample(i, node) fills node i of scene.animated (from `model` as it is
 // then: the nodes before it baked, its own data untouched) just before it is baked, and its frames are released
 // after, so that the frames of one node are held at a time rather than the whole file's. `expected_bytes` (see

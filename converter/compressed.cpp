@@ -74,11 +74,12 @@ CompressedPrimitive take_clips(tinygltf::Model& model, int host, AccessorWriter&
 
 }  // namespace
 
-Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sampled, const CodecSettings& settings,
-                      const DracoSettings& draco, CompressReport& report,
+Status compress_model(tinygltf::Model& model, const std::vector<const SampledNode*>& sampled,
+                      const CodecSettings& settings, const DracoSettings& draco, CompressReport& report,
                       const std::function<void(const std::string&)>& progress) {
   AccessorWriter writer(model);
-  for (const SampledNode& node : sampled) {
+  for (const SampledNode* sampled_node : sampled) {
+    const SampledNode& node = *sampled_node;
     const AnimatedNode& animated = *node.node;
     int host = -1;
     for (size_t n = 0; n < model.nodes.size(); ++n)

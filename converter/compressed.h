@@ -25,14 +25,16 @@ struct CompressReport {
 
 // `model` has just been baked (bake_model) from `sampled`. Replaces each baked primitive's morph targets by a
 // Draco base mesh and an animation stream encoded with `settings`.
-Status compress_model(tinygltf::Model& model, const std::vector<SampledNode>& sampled, const CodecSettings& settings,
+Status compress_model(tinygltf::Model& model, const std::vector<const SampledNode*>& sampled,
+                      const CodecSettings& settings,
                       const DracoSettings& draco, CompressReport& report,
                       const std::function<void(const std::string&)>& progress);
 
 // Compresses the morph-target meshes of `kept` (unskinned nodes, each the only user of its mesh; a lossy
 // `settings`) where they are: each primitive's base mesh with Draco, its targets as one stream, the weights
 // animation left as it is. The error target is that of the animation the weights play.
-Status compress_targets(tinygltf::Model& model, const std::vector<SampledNode>& kept, const CodecSettings& settings,
+Status compress_targets(tinygltf::Model& model, const std::vector<const SampledNode*>& kept,
+                        const CodecSettings& settings,
                         const DracoSettings& draco, CompressReport& report,
                         const std::function<void(const std::string&)>& progress);
 

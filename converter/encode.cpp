@@ -75,20 +75,20 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
   out.kept_skins_floor = 0;
   out.modes.assign(file.sampled.size(), PrimitiveMode::frames);
   out.rigid_meshes.clear();
-  std::vector<SampledNode> kept, baked;
+  std::vector<const SampledNode*> kept, baked;
   std::vector<int> kept_skins;
   for (size_t i = 0; i < file.sampled.size(); ++i) {
     if (keeps_skin(*file.sampled[i].node, choices)) {
       kept_skins.push_back(file.sampled[i].node->node);
       out.modes[i] = PrimitiveMode::kept_skin;
     } else {
-      (keep[i] ? kept : baked).push_back(file.sampled[i]);
+      (keep[i] ? kept : baked).push_back(&file.sampled[i]);
       if (keep[i]) out.modes[i] = PrimitiveMode::kept_targets;
     }
   }
   const auto say = [&](const std::string& message) { report_progress(progress, message); };
   SEGMORPH_RETURN_IF_ERROR(compress_targets(out.model, kept, codec, choices.draco, out.report, say));
-  SEGMORPH_RETURN_IF_ERROR(bake_model(out.model, file.scene, baked));
+  SEGMORPH_RETURN_IF_ERROR(bake_model(out.model, file.scene, baked, false));
   SEGMORPH_RETURN_IF_ERROR(compress_model(out.model, baked, codec, choices.draco, out.report, say));
   if (codec.mode == RateMode::lossless) return Status::Ok();
   // Draco's RMS error is half its step: a step of 2 × share × E / 100 of a mesh's spread is its share of KG E %.

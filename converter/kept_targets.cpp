@@ -141,14 +141,15 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
 
 }  // namespace
 
-Status compress_targets(tinygltf::Model& model, const std::vector<SampledNode>& kept, const CodecSettings& settings,
-                        const DracoSettings& draco, CompressReport& report,
+Status compress_targets(tinygltf::Model& model, const std::vector<const SampledNode*>& kept,
+                        const CodecSettings& settings, const DracoSettings& draco, CompressReport& report,
                         const std::function<void(const std::string&)>& progress) {
   if (kept.empty()) return Status::Ok();
   if (settings.mode == RateMode::lossless)
     return Status(StatusCode::invalid_argument, "morph targets are kept only by lossy encodes");
   AccessorWriter writer(model);
-  for (const SampledNode& node : kept) {
+  for (const SampledNode* kept_node : kept) {
+    const SampledNode& node = *kept_node;
     const AnimatedNode& animated = *node.node;
     if (!animated.morphed || animated.skin >= 0)
       return Status(StatusCode::invalid_argument, "only the targets of unskinned morph meshes are kept");
@@ -158,7 +159,7 @@ Status compress_targets(tinygltf::Model& model, const std::vector<SampledNode>& 
   // zero, normalized 16-bit integers when within [0, 1] or [−1, 1] (a weight off by at most 1/65535 of its
   // range moves a vertex by that fraction of its displacement), floats otherwise.
   std::vector<bool> weighted(model.nodes.size(), false);
-  for (const SampledNode& node : kept) weighted[size_t(node.node->node)] = true;
+  for (const SampledNode* node : kept) weighted[size_t(node->node->node)] = true;
   for (tinygltf::Animation& animation : model.animations) {
     std::vector<bool> done(animation.samplers.size(), false);
     for (const tinygltf::AnimationChannel& channel : animation.channels) {

@@ -31,7 +31,9 @@ tinygltf::Model encoded(const std::string& path, void (*edit)(tinygltf::Model&) 
   if (status.ok()) status = bake_model(model, scene, sampled);
   CompressReport report;
   DracoSettings draco;
-  if (status.ok()) status = compress_model(model, sampled, CodecSettings(), draco, report, [](const std::string&) {});
+  std::vector<const SampledNode*> nodes;
+  for (const SampledNode& node : sampled) nodes.push_back(&node);
+  if (status.ok()) status = compress_model(model, nodes, CodecSettings(), draco, report, [](const std::string&) {});
   EXPECT_TRUE(status.ok()) << status.message();
   return model;
 }
