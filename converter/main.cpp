@@ -300,7 +300,7 @@ int run_encode(const CommandLine& options) {
   Status status = load_input(0, options, input, settings.sampling);
   if (status.ok() && !options.force)
     if (const int refused = refuse_replacing_input(options, input)) return refused;
-  if (status.ok()) status = encode(input, settings, output, &report, progress_of(options));
+  if (status.ok()) status = encode(std::move(input), settings, output, &report, progress_of(options));
   if (!status.ok()) return fail(options, path, status);
   progress(options, "writing " + (options.output == "-" ? std::string("to the standard output") : options.output));
   status = output.save(options.output);

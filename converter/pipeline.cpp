@@ -182,8 +182,15 @@ Status bake(Model& model, const SampleSettings& settings, BakeReport* report, co
 
 Status encode(const Model& input, const EncodeSettings& settings, Model& output, EncodeReport* report,
               const Progress& progress) {
+  return encode(Model(input), settings, output, report, progress);
+}
+
+Status encode(Model&& input, const EncodeSettings& settings, Model& output, EncodeReport* report,
+              const Progress& progress) {
   SampledFile file;
-  SEGMORPH_RETURN_IF_ERROR(analyze_model(input.data().gltf, settings.sampling, true, progress, file));
+  tinygltf::Model gltf = std::move(input.data().gltf);
+  input = Model();
+  SEGMORPH_RETURN_IF_ERROR(analyze_model(std::move(gltf), settings.sampling, true, progress, file));
   EncodeReport local;
   tinygltf::Model encoded;
   SEGMORPH_RETURN_IF_ERROR(encode_sampled(file, settings, encoded, report ? *report : local, progress));

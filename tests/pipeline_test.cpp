@@ -16,6 +16,12 @@ namespace {
 
 std::string sample(const std::string& relative) { return std::string(SEGMORPH_SAMPLES_DIR) + "/" + relative; }
 
+// The bytes of `path` (a file the test wrote).
+std::string bytes_of(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+}
+
 TEST(Pipeline, EncodeDecodeAndVerifyAFile) {
   Model original;
   ASSERT_TRUE(Model::load(sample("AnimatedMorphCube/AnimatedMorphCube.glb"), original).ok());
@@ -61,13 +67,18 @@ TEST(Pipeline, EncodeDecodeAndVerifyAFile) {
   VerifyReport again;
   ASSERT_TRUE(verify(original, read, SampleSettings(), again).ok());
   EXPECT_DOUBLE_EQ(again.kg_percent, measured.kg_percent);
+
+  // Encoding a model it may consume (the tool's form: a large input is not held twice) gives the same file and
+  // leaves the input empty.
+  Model consumed = original, moved_encode;
+  ASSERT_TRUE(encode(std::move(consumed), settings, moved_encode).ok());
+  EXPECT_EQ(moved_encode.glb_size(), encoded.glb_size());
+  const std::string moved_path = testing::temporary_path("pipeline_cube_moved.glb");
+  ASSERT_TRUE(moved_encode.save(moved_path).ok());
+  EXPECT_EQ(bytes_of(moved_path), bytes_of(path));
+  EXPECT_EQ(consumed.glb_size(), Model().glb_size()) << "the input is left empty";
 }
 
-// The bytes of `path` (a file the test wrote).
-std::string bytes_of(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
-}
 
 // The encode is the same bytes at every thread count: lossy (with its rate control's measurements split over
 // threads), at a bpvf target, and lossless, on two bundled morph files and a skinned one (its kept skin's search

@@ -248,6 +248,9 @@ struct EncodeReport {
 // below what the rest of the file takes alone).
 Status encode(const Model& input, const EncodeSettings& settings, Model& output, EncodeReport* report = nullptr,
               const Progress& progress = {});
+// The same, consuming `input` (left empty): a large file is not held twice (the copy the other form makes).
+Status encode(Model&& input, const EncodeSettings& settings, Model& output, EncodeReport* report = nullptr,
+              const Progress& progress = {});
 
 // --- decode ---
 
