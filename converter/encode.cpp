@@ -165,6 +165,25 @@ Status encode_model(const SampledFile& file, const std::vector<bool>& keep, cons
   return Status::Ok();
 }
 
+// What the morph targets of the nodes every encode bakes (keep false) held is in their sampled frames: their data
+// goes from the sampling and from the model each encode copies, so that a long sequence of one-hot targets is held
+// once, as frames. A mesh is released when every node that uses it is baked (a still instance keeps its targets).
+void release_baked_targets(SampledFile& file, const std::vector<bool>& keep) {
+  std::vector<bool> baked_node(file.model.nodes.size(), false), release(file.model.meshes.size(), false);
+  for (size_t i = 0; i < file.sampled.size(); ++i) {
+    if (keep[i]) continue;
+    baked_node[size_t(file.sampled[i].node->node)] = true;
+    release[size_t(file.sampled[i].node->mesh)] = true;
+    for (SampledPrimitive& primitive : file.sampled[i].primitives)
+      for (std::vector<float>& delta : primitive.target_deltas) std::vector<float>().swap(delta);  // the count stays
+  }
+  for (size_t n = 0; n < file.model.nodes.size(); ++n) {
+    const int mesh = file.model.nodes[n].mesh;
+    if (mesh >= 0 && size_t(mesh) < release.size() && !baked_node[n]) release[size_t(mesh)] = false;
+  }
+  release_target_data(file.model, release);
+}
+
 // The worst KG error (%) the encoder reports over the encoded primitives.
 double worst_kg(const CompressReport& report) {
   double worst = 0;
@@ -244,7 +263,7 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
 
 }  // namespace
 
-Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, tinygltf::Model& output,
+Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinygltf::Model& output,
                       EncodeReport& report, const Progress& progress) {
   EncodeChoices choices;
   choices.codec.mode = settings.mode;
@@ -263,6 +282,7 @@ Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, t
   bool any_kept = false;
   for (size_t i = 0; i < file.sampled.size(); ++i)
     any_kept |= keep[i] = keeps_targets(file.model, *file.sampled[i].node, file.sampled[i], settings);
+  release_baked_targets(file, keep);
   Encoded encoded;
   Status status = encode_model(file, keep, choices, progress, encoded);
   if (any_kept && settings.targets == EncodeSettings::Targets::automatic) {

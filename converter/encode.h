@@ -9,8 +9,9 @@
 
 namespace segmorph {
 
-// Encodes the sampled `file` (analyze_model's, sampled with settings.sampling) into `output` as `settings` say.
-Status encode_sampled(const SampledFile& file, const EncodeSettings& settings, tinygltf::Model& output,
+// Encodes the sampled `file` (analyze_model's, sampled with settings.sampling) into `output` as `settings` say. The
+// morph targets of the meshes it bakes are released from `file` (their frames are sampled): see release_target_data.
+Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinygltf::Model& output,
                       EncodeReport& report, const Progress& progress);
 
 }  // namespace segmorph

@@ -479,6 +479,68 @@ std::vector<tinygltf::BufferView> prune(tinygltf::Model& model) {
   return packed;
 }
 
+}  // namespace
+
+void release_target_data(tinygltf::Model& model, const std::vector<bool>& meshes) {
+  // The targets' accessors, and how often anything refers to each: a target's is released when nothing else does.
+  std::vector<size_t> references(model.accessors.size(), 0), target_references(model.accessors.size(), 0);
+  for_each_accessor_ref(model, [&](int& index) {
+    if (index >= 0 && size_t(index) < references.size()) ++references[size_t(index)];
+  });
+  for (size_t m = 0; m < model.meshes.size() && m < meshes.size(); ++m)
+    if (meshes[m])
+      for (const tinygltf::Primitive& primitive : model.meshes[m].primitives)
+        for (const auto& target : primitive.targets)
+          for (const auto& attribute : target)
+            if (attribute.second >= 0 && size_t(attribute.second) < references.size())
+              ++target_references[size_t(attribute.second)];
+  bool released = false;
+  for (size_t a = 0; a < model.accessors.size(); ++a)
+    if (target_references[a] > 0 && target_references[a] == references[a]) {
+      tinygltf::Accessor& accessor = model.accessors[a];
+      released = released || accessor.bufferView >= 0 || accessor.sparse.isSparse;
+      accessor.bufferView = -1;
+      accessor.byteOffset = 0;
+      accessor.sparse.isSparse = false;
+      accessor.sparse.count = 0;
+      accessor.sparse.indices.bufferView = accessor.sparse.values.bufferView = -1;
+    }
+  if (!released) return;
+
+  // Each buffer rebuilt from the views still referred to, in index order, each at a multiple of 4.
+  std::vector<bool> used(model.bufferViews.size(), false);
+  const auto use = [&](int view) {
+    if (view >= 0 && size_t(view) < used.size()) used[size_t(view)] = true;
+  };
+  for (const tinygltf::Accessor& accessor : model.accessors) {
+    use(accessor.bufferView);
+    if (accessor.sparse.isSparse) use(accessor.sparse.indices.bufferView), use(accessor.sparse.values.bufferView);
+  }
+  for (const tinygltf::Image& image : model.images) use(image.bufferView);
+  for_each_extension_view(model, [&](int& view) { use(view); });
+  for (size_t b = 0; b < model.buffers.size(); ++b) {
+    std::vector<unsigned char> kept;
+    for (size_t v = 0; v < model.bufferViews.size(); ++v) {
+      tinygltf::BufferView& view = model.bufferViews[v];
+      if (view.buffer != int(b)) continue;
+      if (!used[v]) {  // nothing refers to it: saving drops it
+        view.byteOffset = 0, view.byteLength = 0;
+        continue;
+      }
+      const unsigned char* data = nullptr;
+      size_t size = 0;
+      if (!buffer_view_bytes(model, int(v), "glTF", &data, &size).ok()) continue;  // load_gltf checked every view
+      kept.resize((kept.size() + 3) / 4 * 4, 0);
+      const size_t offset = kept.size();
+      kept.insert(kept.end(), data, data + size);
+      view.byteOffset = offset;
+    }
+    model.buffers[b].data.swap(kept);
+  }
+}
+
+namespace {
+
 // The packed buffer's bytes (a multiple of 4) for views at their packed places.
 size_t packed_size(const std::vector<tinygltf::BufferView>& packed) {
   return packed.empty() ? 0 : (packed.back().byteOffset + packed.back().byteLength + 3) / 4 * 4;

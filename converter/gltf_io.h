@@ -16,6 +16,13 @@ namespace segmorph {
 // not decode. Non-fatal remarks of the parser go to `warnings`.
 Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<std::string>* warnings = nullptr);
 
+// Frees the bytes of the morph targets of the meshes `meshes` marks (one entry per mesh): their accessors keep their
+// count, type and bounds but lose their data (glTF's all-zero form; an accessor something else also refers to keeps
+// it), and each buffer shrinks to the views something still refers to, every index kept (a view nothing refers to
+// is left empty, and saving drops it). For meshes whose frames are sampled and that are baked anyway: an encode then
+// holds a long sequence of one-hot targets in its frames alone.
+void release_target_data(tinygltf::Model& model, const std::vector<bool>& meshes);
+
 // Drops meshes, skins, accessors, bufferViews and animation samplers nothing refers to, and packs all
 // remaining data, embedded images included, into one buffer (in place, without a second buffer, when the views
 // already lie in order in the first one).

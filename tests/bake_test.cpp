@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -176,6 +177,47 @@ TEST(Bake, ReservedRoomHoldsWhatTheBakeAdds) {
     EXPECT_LE(added, room);
     EXPECT_EQ(model.buffers.back().data.capacity(), before + room) << "the buffer grew past its reservation";
   }
+}
+
+// release_target_data frees the released targets' bytes and keeps everything else as it was, every index kept: the
+// other accessors read the same values, the targets read as zeros, and the file saves. An accessor a target shares
+// with a kept use keeps its data.
+TEST(GltfWriter, ReleasedTargetDataLeavesTheRestAsItWas) {
+  tinygltf::Model model;
+  ASSERT_TRUE(load_gltf(std::string(SEGMORPH_SAMPLES_DIR) + "/WavingFlag/flag.glb", model).ok());
+  tinygltf::Primitive& primitive = model.meshes[0].primitives[0];
+  ASSERT_EQ(primitive.targets.size(), 3u);  // each accessor in a bufferView of its own, as Blender writes them
+  const int shared = primitive.targets[1].at("POSITION");
+  primitive.attributes["TEXCOORD_9"] = shared;  // the second target's accessor, used elsewhere too
+  std::vector<std::vector<float>> before(model.accessors.size());
+  size_t bytes_before = 0, bytes_after = 0;
+  for (size_t a = 0; a < model.accessors.size(); ++a) ASSERT_TRUE(read_floats(model, int(a), "a", before[a]).ok());
+  for (const tinygltf::Buffer& buffer : model.buffers) bytes_before += buffer.data.size();
+  release_target_data(model, {true});
+  for (const tinygltf::Buffer& buffer : model.buffers) bytes_after += buffer.data.size();
+  std::vector<int> released;  // the five target accessors but the shared one
+  for (const auto& target : primitive.targets)
+    for (const auto& attribute : target)
+      if (attribute.second != shared) released.push_back(attribute.second);
+  ASSERT_EQ(released.size(), 5u);
+  size_t released_bytes = 0;
+  for (int a : released) {
+    EXPECT_EQ(model.accessors[size_t(a)].bufferView, -1);
+    released_bytes += before[size_t(a)].size() * sizeof(float);
+  }
+  EXPECT_EQ(bytes_after + released_bytes, bytes_before);
+  for (size_t a = 0; a < model.accessors.size(); ++a) {
+    std::vector<float> after;
+    ASSERT_TRUE(read_floats(model, int(a), "a", after).ok());
+    if (std::find(released.begin(), released.end(), int(a)) != released.end())
+      EXPECT_EQ(after, std::vector<float>(before[a].size(), 0.0f));
+    else
+      EXPECT_EQ(after, before[a]) << "accessor " << a;
+  }
+  const std::string path = temporary_path("released_targets.glb");
+  ASSERT_TRUE(save_gltf(model, path).ok());
+  tinygltf::Model read;
+  EXPECT_TRUE(load_gltf(path, read).ok());
 }
 
 // The sequences are one-hot morph animations whose frame f is exactly base + target f-1 at time f/30.
