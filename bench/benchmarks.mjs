@@ -143,6 +143,7 @@ async function main() {
   if (options.parts.includes('large')) {
     const samples = options.quick ? path.join(root, 'samples') : options.samples;
     if (!existsSync(samples)) throw new StepError(`${samples} is absent: the large part copies its skinned samples (--samples DIR)`);
+    tools.require('codec_scaling');
     await runPart('large', options, tools, () => measureLarge(tools, samples, path.join(options.out, 'large'), LARGE[mode]));
   }
 

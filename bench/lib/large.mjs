@@ -1,17 +1,21 @@
 // Large files, whole commands: production-size skinned characters (many skinned primitives, as a game character
-// split by material is), encoded with their skins kept and baked into frames, next to gltfpack on the same file.
+// split by material is), encoded with their skins kept and baked into frames, next to gltfpack on the same file;
+// and production-size cloth-like sequences as glTF one-hot morph targets, the form vertex caches reach glTF in.
 // The harness writes the many-primitive files from a shared sample: copies of its skinned mesh, each with positions
-// of its own (a small offset per copy), so that no tool can merge them as one mesh.
+// of its own (a small offset per copy), so that no tool can merge them as one mesh. It writes the sequences with
+// bench/codec_scaling (its torus, as an OBJ + PC2 vertex cache) and segmorph bake.
 
-import { mkdirSync, readFileSync, writeFileSync } from 'node:fs';
+import { mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { deliveredBytes, fileBytes, progress } from './tools.mjs';
 import { SPEED_ERROR, SPEED_GLTFPACK_BITS, repeated } from './speed.mjs';
 
 export const LARGE = {
   full: { repeats: 3, sources: ['gltf/RobotExpressive/RobotExpressive.glb'],
-          copies: [{ source: 'gltf/CesiumMan/CesiumMan.glb', counts: [20, 60] }] },
-  quick: { repeats: 1, sources: [], copies: [{ source: 'Fox/Fox.glb', counts: [3] }] },
+          copies: [{ source: 'gltf/CesiumMan/CesiumMan.glb', counts: [20, 60] }],
+          sequences: { frames: 300, vertices: [50000, 100000, 200000] } },
+  quick: { repeats: 1, sources: [], copies: [{ source: 'Fox/Fox.glb', counts: [3] }],
+           sequences: { frames: 10, vertices: [2000] } },
 };
 
 // { json, bin } of a .glb (one JSON chunk, then at most one BIN chunk).
@@ -108,7 +112,42 @@ function measureLargeFile(tools, input, dir, repeats) {
   };
 }
 
-// { repeats, files: [{ label, primitives, result }] }: the plan's shared sources as they are, then its copies.
+// One sequence of about `vertices` × `frames`, once each (the largest take minutes): written, baked from its cache,
+// encoded, decoded; gltfpack on the glTF. Raw bytes only: brotli -q 11 of gltfpack's hundreds of MB takes minutes.
+function measureSequence(tools, vertices, frames, dir) {
+  mkdirSync(dir, { recursive: true });
+  const prefix = path.join(dir, 'torus'), gltf = path.join(dir, 'torus.glb'), encoded = path.join(dir, 'encoded.glb');
+  const write = tools.run(path.join(dir, 'write.log'), 'codec_scaling',
+                          ['--vertices', String(vertices), '--frames', String(frames), '--write-cache', prefix]);
+  if (!write.ok) return { failed: `codec_scaling --write-cache failed (${path.join(dir, 'write.log')})` };
+  const steps = {
+    bake: ['segmorph', ['bake', '-q', `${prefix}.obj`, '--cache', `${prefix}.pc2`, '-o', gltf]],
+    encode: ['segmorph', ['encode', '-q', gltf, '-o', encoded, '--error', String(SPEED_ERROR), '--json']],
+    decode: ['segmorph', ['decode', '-q', encoded, '-o', path.join(dir, 'decoded.glb')]],
+    gltfpack: ['gltfpack', ['-i', gltf, '-o', path.join(dir, 'gltfpack.glb'), '-cc', '-af', '0', '-vp', String(SPEED_GLTFPACK_BITS)]],
+  };
+  const result = {};
+  for (const [name, [command, args]] of Object.entries(steps)) {
+    const run = tools.run(path.join(dir, `${name}.log`), command, args);
+    if (!run.ok) return { failed: `${name} failed (${path.join(dir, `${name}.log`)})` };
+    result[name] = pick({ wall_ms: run.time.wall_ms, cpu_ms: run.time.user_ms + run.time.sys_ms, max_rss_kb: run.time.max_rss_kb });
+    if (name === 'encode') {
+      const report = JSON.parse(run.stdout.trim().split('\n').pop());
+      Object.assign(result.encode, { kg: report.kg_percent, vertices: report.primitives[0].vertices, frames: report.primitives[0].frames });
+    }
+    progress(`  sequence ${vertices} × ${frames}: ${name} ${(run.time.wall_ms / 1000).toFixed(1)} s`);
+  }
+  result.gltf_bytes = fileBytes(gltf);
+  result.encode.bytes = fileBytes(encoded);
+  result.gltfpack.bytes = fileBytes(path.join(dir, 'gltfpack.glb'));
+  rmSync(gltf, { force: true });  // hundreds of MB each
+  rmSync(path.join(dir, 'decoded.glb'), { force: true });
+  rmSync(`${prefix}.pc2`, { force: true });
+  return result;
+}
+
+// { repeats, files: [{ label, result }], sequences: [{ vertices, frames, result }] }: the plan's shared sources as
+// they are, then its copies, then its sequences.
 export function measureLarge(tools, samples, dir, plan) {
   mkdirSync(dir, { recursive: true });
   const files = [];
@@ -130,6 +169,11 @@ export function measureLarge(tools, samples, dir, plan) {
       progress(`large ${i + 1}/${files.length}: ${label}`);
       if (failed) return { label, result: { failed } };
       return { label, result: measureLargeFile(tools, file, path.join(dir, String(i + 1)), plan.repeats) };
+    }),
+    sequences: plan.sequences.vertices.map((vertices) => {
+      progress(`large: sequence of ${vertices} vertices × ${plan.sequences.frames} frames`);
+      return { vertices, frames: plan.sequences.frames,
+               result: measureSequence(tools, vertices, plan.sequences.frames, path.join(dir, `sequence-${vertices}`)) };
     }),
   };
 }

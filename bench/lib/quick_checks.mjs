@@ -53,6 +53,16 @@ export function checkQuick(parts, doc, chartDir) {
     expect(m.encode.bytes.brotli > 0 && m.gltfpack.bytes.brotli > 0 && m.bake.bytes > m.input_bytes, `${label}: large: sizes`);
     expect(finite(m.encode.kg) && m.encode.kg > 0 && m.encode.kg <= 0.15, `${label}: large: encode KG ${m.encode.kg} %`);
   }
+  for (const { vertices, frames, result: m } of parts.large?.sequences ?? []) {
+    const what = `large: sequence ${vertices} × ${frames}`;
+    expect(!m.failed, `${what}: ${m.failed}`);
+    if (m.failed) continue;
+    for (const name of ['bake', 'encode', 'decode', 'gltfpack'])
+      expect(m[name].wall_ms > 0 && m[name].max_rss_kb > 0, `${what}: ${name} has no time or memory`);
+    expect(m.encode.frames === frames && m.gltf_bytes > m.encode.bytes && m.encode.bytes > 0, `${what}: sizes or frames`);
+    expect(finite(m.encode.kg) && m.encode.kg > 0 && m.encode.kg <= 0.15, `${what}: encode KG ${m.encode.kg} %`);
+  }
+  if (parts.large) expect(parts.large.sequences?.length > 0, 'large: no sequence measured');
   for (const { label, stages } of parts.speed?.codec ?? []) {
     expect(!stages.failed, `${label}: ${stages.failed}`);
     for (const name of ['EncodeWhole', 'DecodeWhole', 'DecodeApiClips', 'DecodeApiFrames', 'DecodeFrameCopyLimit'])

@@ -295,7 +295,7 @@ function largePart(large, lines, flags) {
   print('| file | primitives (modes) | V × F | input | encode wall (CPU) | encode peak | encode KG | encode bytes | bake wall (CPU) | bake peak | baked | gltfpack wall (CPU) | gltfpack peak | gltfpack bytes | encode / gltfpack wall |');
   print('|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|');
   const kB = (bytes) => `${(bytes / 1000).toFixed(1)} kB`;
-  const mB = (bytes) => `${(bytes / 1e6).toFixed(1)} MB`;
+  const mB = (bytes) => `${(bytes / 1e6).toPrecision(3)} MB`;
   for (const { label, result: m } of large.files) {
     if (m.failed) { flags.push(`${label}, large: ${m.failed}`); print(`| ${label} | failed: ${m.failed} |`); continue; }
     const count = Object.values(m.modes).reduce((a, b) => a + b, 0);
@@ -312,6 +312,36 @@ function largePart(large, lines, flags) {
   print('V × F: vertex-frames of the animated (skinned and morphed) primitives, what bpvf counts; gltfpack\'s KG is not ' +
         'measured here (rate and distortion above measures it on the shared samples).');
   print();
+  const sequences = large.sequences ?? [];
+  if (sequences.length === 0) return;
+  print('### Sequences as glTF morph targets');
+  print();
+  print('Cloth-like sequences at production size: `bench/codec_scaling --vertices V --frames F --write-cache PREFIX` ' +
+        'writes the scaling torus (travelling waves, a bend, a twist: non-rigid everywhere) as an OBJ and a PC2 vertex ' +
+        'cache, `segmorph bake PREFIX.obj --cache PREFIX.pc2` turns it into the glTF of one-hot morph targets such ' +
+        `animation reaches glTF in, then segmorph \`encode --error ${SPEED_ERROR}\` and \`decode\` of that file, and ` +
+        `gltfpack \`-cc -af 0 -vp ${SPEED_GLTFPACK_BITS}\` on it. One run each (the largest take minutes); raw bytes ` +
+        '(brotli -q 11 of gltfpack\'s hundreds of MB would take longer than the run). The scale target (issue 19): ' +
+        '200k vertices × 300 frames encoded in under 2 minutes and 4 GiB on this 2-core machine.');
+  print();
+  print('| V × F | glTF | bake from the cache: wall, peak | encode wall (CPU) | encode peak | KG | encoded | decode wall, peak | gltfpack wall (CPU) | gltfpack peak | gltfpack file | encode / gltfpack wall |');
+  print('|---|---|---|---|---|---|---|---|---|---|---|---|');
+  for (const { vertices, frames, result: m } of sequences) {
+    if (m.failed) { flags.push(`sequence ${vertices} × ${frames}, large: ${m.failed}`); print(`| ${vertices} × ${frames} | failed: ${m.failed} |`); continue; }
+    print(`| ${m.encode.vertices} × ${m.encode.frames} | ${mB(m.gltf_bytes)} | ${seconds(m.bake.wall_ms)} s, ${mb(m.bake.max_rss_kb)} MB | ` +
+          `${seconds(m.encode.wall_ms)} (${seconds(m.encode.cpu_ms)}) s | ${mb(m.encode.max_rss_kb)} MB | ${kgText(m.encode.kg)} | ${mB(m.encode.bytes)} | ` +
+          `${seconds(m.decode.wall_ms)} s, ${mb(m.decode.max_rss_kb)} MB | ${seconds(m.gltfpack.wall_ms)} (${seconds(m.gltfpack.cpu_ms)}) s | ` +
+          `${mb(m.gltfpack.max_rss_kb)} MB | ${mB(m.gltfpack.bytes)} | ${(m.encode.wall_ms / m.gltfpack.wall_ms).toFixed(1)}× |`);
+    if (!(m.encode.kg <= SPEED_ERROR)) flags.push(`sequence ${vertices} × ${frames}, large: encode KG ${m.encode.kg} % above the requested ${SPEED_ERROR} %`);
+  }
+  print();
+  const target = sequences.find((s) => !s.result.failed && s.vertices >= 200000 && s.frames >= 300);
+  if (target) {
+    const m = target.result, met = m.encode.wall_ms < 120000 && m.encode.max_rss_kb < 4 * 1024 * 1024;
+    print(`The scale target at ${m.encode.vertices} × ${m.encode.frames}: encode ${seconds(m.encode.wall_ms)} s and ` +
+          `${mb(m.encode.max_rss_kb)} MB against 120 s and 4096 MiB: ${met ? 'met' : 'not met yet'}.`);
+    print();
+  }
 }
 
 // What a web page pays: bytes as delivered and load times in Chromium (bench/lib/browser.mjs).
