@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 
+#include "accessor.h"
 #include "bake.h"
 #include "correspondence.h"
 #include "parallel.h"
@@ -302,17 +303,26 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
 
 namespace {
 
-// Positions of primitive `primitive` of node `node`'s mesh moved by the node's global transforms at `times` of
-// `clip` (one frame of the static pose when clip is null): one clip of the primitive in model space.
-Status moved_primitive(const tinygltf::Model& model, const NodeGraph& graph, int node, int primitive, const Clip* clip,
-                       const std::vector<float>& times, FrameSequence& out) {
+// The POSITION (V × 3) of primitive `primitive` of node `node`'s mesh.
+Status rigid_positions(const tinygltf::Model& model, int node, int primitive, std::vector<float>& positions) {
   const tinygltf::Mesh& mesh = model.meshes[size_t(model.nodes[size_t(node)].mesh)];
   const std::string what = "node " + std::to_string(node) + " primitive " + std::to_string(primitive);
   if (size_t(primitive) >= mesh.primitives.size()) return Status(StatusCode::bad_data, what + " does not exist");
-  SampledPrimitive rest;
-  SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, mesh.primitives[size_t(primitive)], what, rest));
-  out = FrameSequence();
-  out.vertex_count = rest.rest_positions.size() / 3;
+  const auto position = mesh.primitives[size_t(primitive)].attributes.find("POSITION");
+  if (position == mesh.primitives[size_t(primitive)].attributes.end())
+    return Status(StatusCode::bad_data, what + " has no POSITION");
+  int components = 0;
+  SEGMORPH_RETURN_IF_ERROR(read_floats(model, position->second, what + " POSITION", positions, &components));
+  if (components != 3 || positions.empty()) return Status(StatusCode::bad_data, what + ": no VEC3 positions");
+  return Status::Ok();
+}
+
+// `positions` (V × 3) moved by node `node`'s global transforms at `times` of `clip` (one frame of the static pose
+// when clip is null): one clip of a rigid primitive in model space.
+FrameSequence moved_positions(const tinygltf::Model& model, const NodeGraph& graph, int node,
+                              const std::vector<float>& positions, const Clip* clip, const std::vector<float>& times) {
+  FrameSequence out;
+  out.vertex_count = positions.size() / 3;
   out.times = clip ? times : std::vector<float>{0.0f};
   out.frame_count = out.times.size();
   out.positions.resize(out.frame_count * out.vertex_count * 3);
@@ -321,12 +331,12 @@ Status moved_primitive(const tinygltf::Model& model, const NodeGraph& graph, int
     evaluate_global_transforms(model, graph, clip, out.times[f], global);
     const Eigen::Matrix4d& transform = global[size_t(node)];
     for (size_t v = 0; v < out.vertex_count; ++v) {
-      const float* p = &rest.rest_positions[v * 3];
+      const float* p = &positions[v * 3];
       const Eigen::Vector4d moved = transform * Eigen::Vector4d(p[0], p[1], p[2], 1.0);
       for (int k = 0; k < 3; ++k) out.frame(f)[v * 3 + size_t(k)] = float(moved[k]);
     }
   }
-  return Status::Ok();
+  return out;
 }
 
 }  // namespace
@@ -337,6 +347,9 @@ Status compare_rigid_primitive(const tinygltf::Model& reference_model, const Sce
   for (const tinygltf::Model* model : {&reference_model, &other_model})
     if (node < 0 || size_t(node) >= model->nodes.size() || model->nodes[size_t(node)].mesh < 0)
       return Status(StatusCode::bad_data, "node " + std::to_string(node) + " has no mesh in both files");
+  std::vector<float> reference_positions, other_positions;
+  SEGMORPH_RETURN_IF_ERROR(rigid_positions(reference_model, node, primitive, reference_positions));
+  SEGMORPH_RETURN_IF_ERROR(rigid_positions(other_model, node, primitive, other_positions));
   // The clips that move the node: a translation, rotation or scale track of it or of an ancestor.
   std::vector<bool> moves(reference_model.nodes.size(), false);
   for (int n = node; n >= 0; n = reference_scene.graph.parent[size_t(n)]) moves[size_t(n)] = true;
@@ -351,22 +364,16 @@ Status compare_rigid_primitive(const tinygltf::Model& reference_model, const Sce
     if (counterpart < 0)
       return Status(StatusCode::bad_data, "the encoded file has no animation for " + reference_scene.clips[c].name);
     const std::vector<float> times = sampling_times(std::move(keys), SampleSettings());
-    reference.emplace_back(), other.emplace_back();
-    SEGMORPH_RETURN_IF_ERROR(moved_primitive(reference_model, reference_scene.graph, node, primitive,
-                                             &reference_scene.clips[c], times, reference.back()));
-    SEGMORPH_RETURN_IF_ERROR(moved_primitive(other_model, other_scene.graph, node, primitive,
-                                             &other_scene.clips[size_t(counterpart)], times, other.back()));
+    reference.push_back(moved_positions(reference_model, reference_scene.graph, node, reference_positions,
+                                        &reference_scene.clips[c], times));
+    other.push_back(moved_positions(other_model, other_scene.graph, node, other_positions,
+                                    &other_scene.clips[size_t(counterpart)], times));
   }
   if (reference.empty()) {  // nothing moves it: its rest pose
-    reference.emplace_back(), other.emplace_back();
-    SEGMORPH_RETURN_IF_ERROR(
-        moved_primitive(reference_model, reference_scene.graph, node, primitive, nullptr, {}, reference.back()));
-    SEGMORPH_RETURN_IF_ERROR(
-        moved_primitive(other_model, other_scene.graph, node, primitive, nullptr, {}, other.back()));
+    reference.push_back(
+        moved_positions(reference_model, reference_scene.graph, node, reference_positions, nullptr, {}));
+    other.push_back(moved_positions(other_model, other_scene.graph, node, other_positions, nullptr, {}));
   }
-  if (reference[0].vertex_count == 0 || other[0].vertex_count == 0)
-    return Status(StatusCode::bad_data,
-                  "node " + std::to_string(node) + " primitive " + std::to_string(primitive) + " has no vertices");
   metrics = paired_metrics(reference, other, match_vertices(reference, other));
   return Status::Ok();
 }

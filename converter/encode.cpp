@@ -226,32 +226,28 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
       if (stream.mesh == primitive.output_mesh && stream.primitive == primitive.output_primitive)
         primitive.clusters = stream.clusters;
     primitive.bytes = coded_bytes(encoded.model, primitive.output_mesh, primitive.output_primitive);
-    primitive.measured = true;
     primitive.error = primitive_error(file.model, compared);
     report.primitives.push_back(primitive);
   }
   for (int mesh : encoded.rigid_meshes)
     for (size_t p = 0; p < encoded.model.meshes[size_t(mesh)].primitives.size(); ++p) {
-      EncodedPrimitive primitive;
-      primitive.mode = PrimitiveMode::rigid;
-      primitive.output_mesh = primitive.error.mesh = mesh;
-      primitive.output_primitive = primitive.error.primitive = int(p);
-      primitive.bytes = coded_bytes(encoded.model, mesh, int(p));
-      for (size_t n = 0; n < encoded.model.nodes.size() && primitive.error.node < 0; ++n)
-        if (encoded.model.nodes[n].mesh == mesh) primitive.error.node = int(n);
-      if (primitive.error.node < 0) continue;  // moving_meshes takes only meshes that nodes use
-      primitive.error.node_name = encoded.model.nodes[size_t(primitive.error.node)].name;
-      ErrorMetrics metrics;
-      status = compare_rigid_primitive(file.model, file.scene, decoded.model, decoded.scene, primitive.error.node,
-                                       int(p), metrics);
+      // Measured on the first node that uses the mesh (moving_meshes takes only meshes that nodes use), and named
+      // by its output mesh and primitive.
+      PrimitiveComparison compared;
+      compared.mesh = mesh, compared.primitive = int(p);
+      for (size_t n = 0; n < encoded.model.nodes.size() && compared.node < 0; ++n)
+        if (encoded.model.nodes[n].mesh == mesh) compared.node = int(n);
+      status = compare_rigid_primitive(file.model, file.scene, decoded.model, decoded.scene, compared.node, int(p),
+                                       compared.metrics);
       if (!status.ok())
         return Status(StatusCode::internal, "measuring the encode's rigid mesh " + std::to_string(mesh) +
                                                 " against the input: " + status.message());
-      primitive.measured = true;
-      primitive.error.vertices = metrics.vertices, primitive.error.frames = metrics.frames;
-      primitive.error.kg_percent = metrics.kg_percent;
-      primitive.error.rmse_over_diagonal = metrics.rmse_over_diagonal;
-      primitive.error.max_error_over_diagonal = metrics.max_error_over_diagonal;
+      EncodedPrimitive primitive;
+      primitive.mode = PrimitiveMode::rigid;
+      primitive.output_mesh = mesh;
+      primitive.output_primitive = int(p);
+      primitive.bytes = coded_bytes(encoded.model, mesh, int(p));
+      primitive.error = primitive_error(encoded.model, compared);
       report.primitives.push_back(primitive);
     }
   report.kg_percent = comparison.worst.kg_percent;

@@ -186,15 +186,7 @@ std::string encoded_primitives_json(const EncodeReport& report) {
   std::string json = "[";
   for (const EncodedPrimitive& primitive : report.primitives) {
     if (json.size() > 1) json += ",";
-    if (primitive.measured) {
-      json += primitive_error_json(primitive.error);
-    } else {
-      json += "{\"node\":" + std::to_string(primitive.error.node) +
-              ",\"node_name\":" + json_string(primitive.error.node_name) +
-              ",\"mesh\":" + std::to_string(primitive.error.mesh) +
-              ",\"primitive\":" + std::to_string(primitive.error.primitive) +
-              ",\"vertices\":" + std::to_string(primitive.error.vertices);
-    }
+    json += primitive_error_json(primitive.error);
     json += std::string(",\"mode\":\"") + mode_name(primitive.mode) + "\",\"output_mesh\":" +
             std::to_string(primitive.output_mesh) + ",\"output_primitive\":" +
             std::to_string(primitive.output_primitive) + ",\"clusters\":" + std::to_string(primitive.clusters) +
@@ -209,14 +201,10 @@ std::string encoded_primitives_text(const EncodeReport& report) {
   for (const EncodedPrimitive& primitive : report.primitives) {
     char line[512];
     const PrimitiveError& e = primitive.error;
-    if (primitive.measured)
-      std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu frames, %zu clusters, %zu bytes, KG %.4f %%%s\n",
-                    primitive_label(e).c_str(), mode_name(primitive.mode), e.vertices, e.frames, primitive.clusters,
-                    primitive.bytes, e.kg_percent,
-                    primitive.mode == PrimitiveMode::rigid ? " of the part alone (not in the file's KG)" : "");
-    else
-      std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu bytes\n", primitive_label(e).c_str(),
-                    mode_name(primitive.mode), e.vertices, primitive.bytes);
+    std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu frames, %zu clusters, %zu bytes, KG %.4f %%%s\n",
+                  primitive_label(e).c_str(), mode_name(primitive.mode), e.vertices, e.frames, primitive.clusters,
+                  primitive.bytes, e.kg_percent,
+                  primitive.mode == PrimitiveMode::rigid ? " of the part alone (not in the file's KG)" : "");
     text += line;
   }
   return text;

@@ -128,14 +128,14 @@ function measureSequence(tools, vertices, frames, dir) {
   };
   const result = {};
   for (const [name, [command, args]] of Object.entries(steps)) {
-    const run = tools.run(path.join(dir, `${name}.log`), command, args);
-    if (!run.ok) return { failed: `${name} failed (${path.join(dir, `${name}.log`)})` };
-    result[name] = pick({ wall_ms: run.time.wall_ms, cpu_ms: run.time.user_ms + run.time.sys_ms, max_rss_kb: run.time.max_rss_kb });
+    const run = repeated(tools, path.join(dir, `${name}.log`), command, args, 1);
+    if (!run.ok) return { failed: `${name} failed (${run.log})` };
+    result[name] = pick(run);
     if (name === 'encode') {
       const report = JSON.parse(run.stdout.trim().split('\n').pop());
       Object.assign(result.encode, { kg: report.kg_percent, vertices: report.primitives[0].vertices, frames: report.primitives[0].frames });
     }
-    progress(`  sequence ${vertices} × ${frames}: ${name} ${(run.time.wall_ms / 1000).toFixed(1)} s`);
+    progress(`  sequence ${vertices} × ${frames}: ${name} ${(run.wall_ms / 1000).toFixed(1)} s`);
   }
   result.gltf_bytes = fileBytes(gltf);
   result.encode.bytes = fileBytes(encoded);

@@ -219,8 +219,7 @@ struct EncodedPrimitive {
   // mesh's primitive (error.mesh and primitive are its output_mesh and output_primitive) is measured in model space
   // at the key times of the clips that move its (first) node, its KG over the part's own spread; verify does not
   // measure rigid meshes, and EncodeReport::kg_percent leaves them out: their Draco step is set against the scene's
-  // size, so a small part reads high on its own. measured is false only for a rigid mesh that no node uses.
-  bool measured = false;
+  // size, so a small part reads high on its own.
   PrimitiveError error;
 };
 
