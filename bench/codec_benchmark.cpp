@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 
 #include "codec.h"
@@ -41,7 +42,7 @@ struct Fixture {
   std::vector<uint32_t> multiplicity;
   std::vector<float> welded;
   ResidualTraversal traversal;
-  std::vector<double> predictions;
+  std::unique_ptr<FramePredictions> predictions;
   size_t vertex_frames = 0;
 };
 Fixture* fixture = nullptr;
@@ -82,7 +83,7 @@ bool set_up(const char* path, double error, bool table_residuals) {
   for (uint32_t w : f.topology.welded_index) ++f.multiplicity[w];
   f.welded = welded_base(f.base, f.content);
   f.traversal = residual_traversal(f.content, f.clips[0].triangles);
-  f.predictions = predicted_frames(f.content, f.welded);
+  f.predictions = std::make_unique<FramePredictions>(f.content, f.welded);
   std::fprintf(stderr, "codec_benchmark: %s: V=%zu, %zu vertex-frames, stream %zu bytes\n", path,
                f.clips[0].vertex_count, f.vertex_frames, f.stream.size());
   return true;
@@ -149,7 +150,7 @@ void EncodeMeasureSubbands(benchmark::State& state) {
   }
   for (auto _ : state) {
     SubbandCurve curves[3];
-    measure_subbands(f.content, f.traversal, f.predictions, f.trajectories.positions, f.multiplicity, steps, curves);
+    measure_subbands(f.content, f.traversal, *f.predictions, f.trajectories.positions, f.multiplicity, steps, curves);
     benchmark::DoNotOptimize(curves[0].bits.data());
   }
   state.counters["vf/s"] =

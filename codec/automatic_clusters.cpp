@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "motion_quantization.h"
 #include "rate_control.h"
@@ -66,6 +67,7 @@ class CandidateCost {
 
   double operator()(const Clusters& merged, uint8_t flags) const {
     const EncodeProblem& p = problem_;
+    report_progress(p.settings, "cluster count: trying " + std::to_string(merged.count) + " clusters");
     const Clusters candidate =
         refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency, kSampleRefinements, nullptr,
                          p.settings.threads);
@@ -79,7 +81,7 @@ class CandidateCost {
     quantize_motion_and_weights(motion, motion_step / cluster_radius(p.base_welded, motion.centroid, candidate.label),
                                 motion_step, p.base_welded, sample_.frames, candidate, p.adjacency,
                                 p.settings.blend_weights, trial);
-    const std::vector<double> trial_predictions = predicted_frames(trial, p.base_welded, p.settings.threads);
+    const FramePredictions trial_predictions(trial, p.base_welded);
     const std::vector<double> steps = {p.mean_step, 2 * p.mean_step};
     SubbandCurve measured[3];
     measure_subbands(trial, p.traversal, trial_predictions, sample_.frames.positions, p.multiplicity,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,11 @@
 #include "segmorph/status.h"
 
 namespace segmorph {
+
+// Where encode_animation is on long work: its stage ("rate control: measuring 12 steps") and the fraction of that
+// stage done, in [0, 1], or negative when the stage cannot say. Called on the encoding thread, often (once a frame in
+// the passes over every frame): a caller that prints should throttle it.
+using CodecProgress = std::function<void(const std::string& stage, double fraction)>;
 
 struct CodecSettings {
   RateMode mode = RateMode::error;
@@ -31,6 +37,7 @@ struct CodecSettings {
   // Threads for the stages that split their work (parallel.h); 0: every hardware thread. The stream is the same
   // bytes for every number.
   size_t threads = 1;
+  CodecProgress progress;  // empty: none
 };
 
 // clips: the primitive's clips (same V and triangles; frame 0 of clip 0 is the base frame). base: V × 3, the

@@ -51,7 +51,10 @@ Status diffusion_morse_function(const std::vector<double>& positions, const Weld
   CotangentLaplacian laplacian;
   SEGMORPH_RETURN_IF_ERROR(cotangent_laplacian(positions, topology.triangles, laplacian));
   ComponentSpectra spectra;
-  SEGMORPH_RETURN_IF_ERROR(component_spectra(laplacian, topology, settings.eigenpairs, spectra));
+  EigenSettings eigen_settings;
+  eigen_settings.progress = settings.progress;
+  SEGMORPH_RETURN_IF_ERROR(component_spectra(laplacian, topology, settings.eigenpairs, spectra, eigen_settings));
+  if (settings.progress) settings.progress("feature points and the Morse function");
 
   for (const ComponentSpectrum& component : spectra.components) {
     const std::vector<uint32_t>& vertices = component.vertices;

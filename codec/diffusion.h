@@ -21,6 +21,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "segmorph/status.h"
@@ -32,6 +34,8 @@ struct DiffusionSettings {
   size_t eigenpairs = 40;  // per component, the constant one included
   double epsilon = 0.074;  // extremum neighbourhood, as a fraction of sqrt(component area)
   int time_samples = 24;   // log-spaced times of the integral over [t1, t2]
+  // Told each step ("eigenpairs: factorizing", "feature points", ...); empty: nothing.
+  std::function<void(const std::string& step)> progress;
 };
 
 struct MorseFunction {

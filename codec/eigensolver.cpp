@@ -177,6 +177,10 @@ Status shift_invert_eigenpairs(const SparseMatrix& stiffness, const Eigen::Vecto
                                const EigenSettings& settings, Eigenpairs& out) {
   const Eigen::Index n = stiffness.rows();
   const double sigma = -kShiftAreaFraction / mass.sum();
+  const auto say = [&](const std::string& step) {
+    if (settings.progress) settings.progress(step + " (" + std::to_string(n) + " vertices)");
+  };
+  say("eigenpairs: factorizing");
   const Factorization factorization(plus_mass(stiffness, mass, -sigma));
   // K − σM is positive definite when K is positive semidefinite: a non-positive pivot means it is not.
   if (factorization.info() != Eigen::Success || !(factorization.vectorD().minCoeff() > 0)) {
@@ -185,6 +189,7 @@ Status shift_invert_eigenpairs(const SparseMatrix& stiffness, const Eigen::Vecto
   }
 
   Eigen::MatrixXd locked(n, 0);
+  say("eigenpairs: Lanczos iteration");
   SEGMORPH_RETURN_IF_ERROR(lanczos(factorization, mass, sigma, locked, count, settings, out.vectors));
   for (int deflation = 0;; ++deflation) {
     SEGMORPH_RETURN_IF_ERROR(rayleigh_ritz(stiffness, mass, out));
@@ -194,6 +199,7 @@ Status shift_invert_eigenpairs(const SparseMatrix& stiffness, const Eigen::Vecto
     while (found_below > 0 && out.values[found_below - 1] >= cluster_floor) --found_below;
     if (found_below == 0) return Status::Ok();  // only the last cluster: nothing can have been skipped below it
     const double tau = 0.5 * (out.values[found_below - 1] + last);
+    say("eigenpairs: checking by inertia");
     const Eigen::Index below = eigenvalues_below(stiffness, mass, tau);
     if (below < 0) {
       return Status(StatusCode::numerical,
@@ -206,6 +212,7 @@ Status shift_invert_eigenpairs(const SparseMatrix& stiffness, const Eigen::Vecto
                         " but Lanczos found " + std::to_string(found_below) + " after " +
                         std::to_string(kMaxDeflations) + " deflated restarts (" + std::to_string(n) + " vertices)");
     }
+    say("eigenpairs: deflated restart " + std::to_string(deflation + 1));
     locked = out.vectors.leftCols(found_below);
     Eigen::MatrixXd fresh;
     SEGMORPH_RETURN_IF_ERROR(lanczos(factorization, mass, sigma, locked, count - found_below, settings, fresh));

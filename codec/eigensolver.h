@@ -18,6 +18,8 @@
 #include <Eigen/SparseCore>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "laplacian.h"
@@ -49,6 +51,8 @@ struct EigenSettings {
   // Spectra's convergence test: each Ritz value ν = 1/(λ − σ) has a residual below tolerance · |ν|.
   double tolerance = 1e-10;
   int max_restarts = 1000;  // implicit restarts of the Lanczos iteration before giving up
+  // Told each step of the shift-invert search ("factorizing", "Lanczos iteration", ...); empty: nothing.
+  std::function<void(const std::string& step)> progress;
 };
 
 // Shift of the shift-invert mode: σ = −kShiftAreaFraction / (Σ mass). The first nonzero eigenvalue of a

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "codec.h"
@@ -38,6 +39,11 @@ struct EncodeProblem {
   // The KG target as squared distortion: (E / 100)² × spread.
   double max_distortion() const { return std::pow(settings.target / 100.0, 2) * spread; }
 };
+
+// Reports a stage of the encode and the fraction of it done (negative: not known) to the settings' progress, if any.
+inline void report_progress(const CodecSettings& settings, const std::string& stage, double fraction = -1) {
+  if (settings.progress) settings.progress(stage, fraction);
+}
 
 using EncodeClock = std::chrono::steady_clock;
 inline double milliseconds_since(EncodeClock::time_point start) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <string>
 
 #include "automatic_clusters.h"
 #include "codec.h"
@@ -18,7 +19,6 @@
 #include "segmentation.h"
 #include "stream_format.h"
 #include "topology.h"
-#include "vertex_gather.h"
 
 namespace segmorph {
 namespace {
@@ -102,15 +102,20 @@ Status set_up(EncodeProblem& p, StreamContent& content) {
 // concavity refinement of its levels (Eq. 6).
 Status segment(const EncodeProblem& p, Clusters& clusters, StreamReport& report) {
   const std::vector<double> positions = welded_positions(p.clips[0].frame(0), p.topology);
+  report_progress(p.settings, "segmentation: heat diffusion (" + std::to_string(p.welded) + " vertices)");
+  DiffusionSettings diffusion;
+  diffusion.progress = [&](const std::string& step) { report_progress(p.settings, "segmentation: " + step); };
   MorseFunction morse;
-  SEGMORPH_RETURN_IF_ERROR(diffusion_morse_function(positions, p.topology, p.adjacency, DiffusionSettings(), morse));
+  SEGMORPH_RETURN_IF_ERROR(diffusion_morse_function(positions, p.topology, p.adjacency, diffusion, morse));
   MorseBands bands;
   const MorseSettings morse_settings;
+  report_progress(p.settings, "segmentation: Morse levels");
   clusters = morse_segmentation(morse.mu, p.topology, p.adjacency, morse_settings, &bands);
   report.e_pi_morse = motion_compensation_error(p.base_welded.data(), p.trajectories, clusters,
                                                 fit_affine_motion(p.base_welded.data(), p.trajectories, clusters,
                                                                   p.settings.threads));
   if (p.settings.curvature_refinement) {
+    report_progress(p.settings, "segmentation: concavity refinement");
     const MorseBands refined = refine_levels(morse.mu, minimum_curvature(positions, p.topology), p.topology,
                                              p.adjacency, bands, RefinementSettings(), &report.curvature_refinement_passes);
     clusters = clusters_from_levels(morse.mu, p.topology, p.adjacency, refined, morse_settings);
@@ -131,26 +136,17 @@ void set_scales(EncodeProblem& p, double e_pi_morse) {
   p.mean_step = std::max(p.mean_step, p.finest_step);
 }
 
-// The decoder's frames (F × W × 3, welded) in the clips' original vertex order, and their KG error.
-std::vector<FrameSequence> restored_clips(const EncodeProblem& p, const std::vector<float>& decoded,
-                                          double& kg_percent) {
-  std::vector<FrameSequence> restored(p.clips.size());
-  ErrorAccumulator accumulator;
-  const VertexGather to_vertices(p.topology.welded_index);
-  size_t frame = 0;
-  for (size_t c = 0; c < p.clips.size(); ++c) {
-    FrameSequence& clip = restored[c];
-    clip.vertex_count = p.vertex_count;
-    clip.frame_count = p.clips[c].frame_count;
-    clip.times = p.clips[c].times;
-    clip.triangles = p.clips[c].triangles;
-    clip.positions.resize(clip.frame_count * p.vertex_count * 3);
-    for (size_t f = 0; f < clip.frame_count; ++f, ++frame)
-      to_vertices.gather(&decoded[frame * p.welded * 3], clip.frame(f));
-    accumulator.add(p.clips[c], clip);
+// Clips shaped as the input's (frame times, triangles, positions sized) for the decoder's frames.
+std::vector<FrameSequence> shaped_like(const std::vector<FrameSequence>& clips) {
+  std::vector<FrameSequence> shaped(clips.size());
+  for (size_t c = 0; c < clips.size(); ++c) {
+    shaped[c].vertex_count = clips[c].vertex_count;
+    shaped[c].frame_count = clips[c].frame_count;
+    shaped[c].times = clips[c].times;
+    shaped[c].triangles = clips[c].triangles;
+    shaped[c].positions.resize(clips[c].positions.size());
   }
-  kg_percent = accumulator.result().kg_percent;
-  return restored;
+  return shaped;
 }
 
 }  // namespace
@@ -173,9 +169,11 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   set_scales(problem, report.e_pi_morse);
   clusters = choose_clusters(problem, clusters, content);
   if (settings.motion_refinement) {
+    report_progress(settings, "motion refinement");
     clusters = refine_by_motion(clusters, problem.base_welded.data(), problem.trajectories, problem.adjacency, 8,
                                 &report.motion_refinement_iterations, settings.threads);
   }
+  report_progress(settings, "motion fit");
   const AffineMotion fitted =
       fit_affine_motion(problem.base_welded.data(), problem.trajectories, clusters, settings.threads);
   report.e_pi = motion_compensation_error(problem.base_welded.data(), problem.trajectories, clusters, fitted);
@@ -184,11 +182,13 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   content.labels = clusters.label;
   report.ms_segmentation = milliseconds_since(start);
 
-  // Motion and residual steps, residual symbols, the stream.
-  std::vector<float> decoded;
-  code_stream(problem, clusters, fitted, content, report, stream, decoded);
-
-  std::vector<FrameSequence> restored = restored_clips(problem, decoded, report.kg_percent);
+  // Motion and residual steps, residual symbols, the stream; the decoder's frames and their KG error.
+  std::vector<FrameSequence> restored = shaped_like(clips);
+  code_stream(problem, clusters, fitted, content, report, stream, restored);
+  content = StreamContent();  // its residual symbols are as large as the frames
+  ErrorAccumulator accumulator;
+  for (size_t c = 0; c < clips.size(); ++c) accumulator.add(clips[c], restored[c]);
+  report.kg_percent = accumulator.result().kg_percent;
   if (reconstruction) *reconstruction = std::move(restored);
   if (report_out) *report_out = report;
   return Status::Ok();

@@ -74,9 +74,9 @@ void quantize_lanes(size_t count, double weight, const double* __restrict p, con
 // decoder's loop, in the same order. Arrays are by position in the traversal, so the walk reads them front to
 // back and a vertex's earlier neighbours are mostly close behind.
 void measure_lanes(const StreamContent& content, const ResidualTraversal& traversal,
-                   const std::vector<double>& predictions, const std::vector<float>& targets,
+                   const FramePredictions& predictions, const std::vector<float>& targets,
                    const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                   SubbandCurve (&curves)[3]) {
+                   SubbandCurve (&curves)[3], const std::function<void(double)>& progress) {
   const size_t welded = multiplicity.size();
   const bool temporal = content.flags & format::kFlagTemporalResiduals;
   const bool spatial = content.flags & format::kFlagSpatialResiduals;
@@ -94,6 +94,7 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
   std::vector<double> previous(welded * count), current(welded * count), change(welded * count, 0.0);
   std::vector<int32_t> previous_symbol(welded * count), current_symbol(welded * count);
   std::vector<EntropyCounter> entropy(count);
+  std::vector<double> predicted(welded * 3);  // in welded order
   std::vector<double> frame_prediction(welded * 3), frame_target(welded * 3), frame_weight(welded);
   for (size_t v = 0; v < welded; ++v) frame_weight[traversal.position[v]] = multiplicity[v];
   size_t frame = 0;
@@ -102,11 +103,11 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
     std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
     for (uint32_t f = 0; f < frames; ++f, ++frame) {
       // This frame's predictions and targets, by position in the traversal.
+      predictions.predict(frame, predicted.data());
       for (size_t v = 0; v < welded; ++v)
         for (size_t axis = 0; axis < 3; ++axis) {
-          const size_t index = (frame * welded + v) * 3 + axis;
-          frame_prediction[traversal.position[v] * 3 + axis] = predictions[index];
-          frame_target[traversal.position[v] * 3 + axis] = double(targets[index]);
+          frame_prediction[traversal.position[v] * 3 + axis] = predicted[v * 3 + axis];
+          frame_target[traversal.position[v] * 3 + axis] = double(targets[(frame * welded + v) * 3 + axis]);
         }
       for (size_t position = 0; position < welded; ++position) {
         const uint32_t begin = traversal.earlier_offset[position], end = traversal.earlier_offset[position + 1];
@@ -135,6 +136,7 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
       }
       previous.swap(current);
       previous_symbol.swap(current_symbol);
+      if (progress) progress(double(frame + 1) / double(content.frame_count()));
     }
   }
   for (size_t s = 0; s < count; ++s) {
@@ -150,11 +152,11 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
 // The lanes split into contiguous ranges, one walk over the frames per thread (a lane's arithmetic does not depend
 // on the others'), the ranges' measurements appended in lane order: the same curves for every thread count.
 void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
-                      const std::vector<double>& predictions, const std::vector<float>& targets,
+                      const FramePredictions& predictions, const std::vector<float>& targets,
                       const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                      SubbandCurve (&curves)[3], size_t threads) {
+                      SubbandCurve (&curves)[3], size_t threads, const std::function<void(double)>& progress) {
   const size_t lanes = steps[0].size() + steps[1].size() + steps[2].size();
-  // Each range walks every frame's predictions and targets: at least two lanes a thread make that worth it.
+  // Each range predicts and walks every frame: at least two lanes a thread make that worth it.
   const size_t ranges = std::min(thread_count(threads), std::max<size_t>(lanes / 2, 1));
   struct Curves {
     SubbandCurve axis[3];
@@ -172,7 +174,9 @@ void measure_subbands(const StreamContent& content, const ResidualTraversal& tra
           if (lane >= range_begin[r] && lane < range_begin[r + 1]) subset[axis].push_back(step);
           ++lane;
         }
-      measure_lanes(content, traversal, predictions, targets, multiplicity, subset, measured[r].axis);
+      // The first range runs on the calling thread: it reports.
+      measure_lanes(content, traversal, predictions, targets, multiplicity, subset, measured[r].axis,
+                    r == 0 ? progress : std::function<void(double)>());
     }
   });
   for (size_t r = 0; r < ranges; ++r)
@@ -183,18 +187,6 @@ void measure_subbands(const StreamContent& content, const ResidualTraversal& tra
       to.distortion.insert(to.distortion.end(), from.distortion.begin(), from.distortion.end());
       to.bits.insert(to.bits.end(), from.bits.begin(), from.bits.end());
     }
-}
-
-std::vector<double> predicted_frames(const StreamContent& content, const std::vector<float>& welded, size_t threads) {
-  const AffineMotion motion = dequantized_motion(content, welded);
-  const ClusterWeights weights = dequantized_weights(content);
-  const size_t row = size_t(content.welded_count) * 3;
-  std::vector<double> predictions(content.frame_count() * row);
-  const FramePredictor predictor(welded.data(), motion, weights);
-  parallel_ranges(content.frame_count(), thread_count(threads), [&](size_t begin, size_t end) {
-    for (size_t f = begin; f < end; ++f) predictor.predict(f, &predictions[f * row]);
-  });
-  return predictions;
 }
 
 StepChoice choose_steps(const SubbandCurve (&curves)[3], double lambda) {

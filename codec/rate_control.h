@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "reconstruction.h"
@@ -17,18 +18,36 @@ struct SubbandCurve {
   std::vector<double> step, distortion, bits;
 };
 
+// The predicted frames of a stream content (reconstruction.h's predicted_frames), computed a frame at a time where
+// they are used, as the decoder does: held for every frame they would take F × W × 3 doubles, twice the frames' own
+// size, for a pass that costs less than reading them back from memory.
+class FramePredictions {
+ public:
+  FramePredictions(const StreamContent& content, const std::vector<float>& welded)
+      : motion_(dequantized_motion(content, welded)),
+        weights_(dequantized_weights(content)),
+        predictor_(welded.data(), motion_, weights_) {}
+  FramePredictions(const FramePredictions&) = delete;  // the predictor refers to motion_
+  FramePredictions& operator=(const FramePredictions&) = delete;
+  // Frame `frame`'s predicted positions, W × 3.
+  void predict(size_t frame, double* out) const { predictor_.predict(frame, out); }
+
+ private:
+  const AffineMotion motion_;
+  const ClusterWeights weights_;
+  const FramePredictor predictor_;
+};
+
 // Closed-loop D(q) and R(q) of the three subbands at more candidate steps (steps[axis], any number each; the
 // measurements are appended to curves[axis]): the decoder's residual loop (reconstruction.h) with the content's
-// flags and clips. predictions, targets: F × W × 3; multiplicity: W (original vertices per welded vertex). The
-// steps are measured on up to `threads` threads (0: every hardware thread), with the same results for any number.
+// flags and clips. targets: F × W × 3; multiplicity: W (original vertices per welded vertex). The steps are measured
+// on up to `threads` threads (0: every hardware thread), with the same results for any number. `progress`, if any,
+// is called on the calling thread with the fraction of the frames walked, after each frame.
 void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
-                      const std::vector<double>& predictions, const std::vector<float>& targets,
+                      const FramePredictions& predictions, const std::vector<float>& targets,
                       const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                      SubbandCurve (&curves)[3], size_t threads = 1);
-
-// reconstruction.h's predicted_frames, the frames split over up to `threads` threads (0: every hardware thread): the
-// same predictions, F × W × 3.
-std::vector<double> predicted_frames(const StreamContent& content, const std::vector<float>& welded, size_t threads);
+                      SubbandCurve (&curves)[3], size_t threads = 1,
+                      const std::function<void(double fraction)>& progress = {});
 
 struct StepChoice {
   size_t index[3] = {0, 0, 0};  // into each curve

@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string>
 
 #include "motion_quantization.h"
 #include "rate_control.h"
 #include "rate_target.h"
 #include "reconstruction.h"
+#include "vertex_gather.h"
 
 namespace segmorph {
 namespace {
@@ -29,7 +32,7 @@ class RateControlDriver {
   // The motion and residual steps, as the target mode asks.
   void choose_steps();
   // The residual symbols for the chosen steps and the stream (with a rate target, re-encoded until it lands on it).
-  void encode(std::vector<uint8_t>& stream, std::vector<float>& decoded);
+  void encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored);
 
  private:
   void extend(const std::vector<double> (&candidates)[3]);
@@ -40,7 +43,7 @@ class RateControlDriver {
   StepChoice choose();
   void residual_rate_control(bool fresh);
   void choose_motion_step_ratio();
-  void encode_residuals(std::vector<uint8_t>& stream, std::vector<float>& decoded);
+  void encode_residuals(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored);
   void set_residual_steps() {
     for (int axis = 0; axis < 3; ++axis) content_.residual_step[axis] = float(curves_[axis].step[choice_.index[axis]]);
   }
@@ -53,7 +56,7 @@ class RateControlDriver {
   StreamContent& content_;
   StreamReport& report_;
   double mean_step_ = 0;
-  std::vector<double> predictions_;
+  std::optional<FramePredictions> predictions_;  // of the current motion
   StepChoice choice_;
   SubbandCurve curves_[3];
   double residual_budget_ = 0;
@@ -72,8 +75,11 @@ void RateControlDriver::extend(const std::vector<double> (&candidates)[3]) {
           std::find(steps[axis].begin(), steps[axis].end(), step) == steps[axis].end())
         steps[axis].push_back(step);
     }
-  measure_subbands(content_, p_.traversal, predictions_, p_.trajectories.positions, p_.multiplicity, steps, curves_,
-                   settings_.threads);
+  const std::string stage =
+      "rate control: measuring " + std::to_string(steps[0].size() + steps[1].size() + steps[2].size()) + " steps";
+  report_progress(settings_, stage, 0);
+  measure_subbands(content_, p_.traversal, *predictions_, p_.trajectories.positions, p_.multiplicity, steps, curves_,
+                   settings_.threads, [&](double fraction) { report_progress(settings_, stage, fraction); });
 }
 
 // Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1, ±2), after widening the
@@ -106,6 +112,7 @@ void RateControlDriver::refine_steps(StepChoice& choice, Choose choose) {
 // radius), and the predictions they give.
 void RateControlDriver::prepare_motion(double motion_step) {
   auto begin = EncodeClock::now();
+  report_progress(settings_, "rate control: quantizing the motion");
   motion_step = std::max(motion_step, p_.finest_step);
   const bool lossless = settings_.mode == RateMode::lossless;
   quantize_motion_and_weights(fitted_, lossless ? 1e-6 : motion_step / radius_, lossless ? 1e-6 * radius_ : motion_step,
@@ -113,7 +120,7 @@ void RateControlDriver::prepare_motion(double motion_step) {
                               content_);
   report_.ms_motion += milliseconds_since(begin);
   begin = EncodeClock::now();
-  predictions_ = predicted_frames(content_, p_.base_welded, settings_.threads);
+  predictions_.emplace(content_, p_.base_welded);
   report_.ms_prediction += milliseconds_since(begin);
 }
 
@@ -206,38 +213,45 @@ void RateControlDriver::choose_steps() {
   }
 }
 
-// Residual symbols by the decoder's own loop, then the stream; `decoded` receives the reconstruction.
-void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vector<float>& decoded) {
+// Residual symbols by the decoder's own loop, then the stream; `restored` receives the reconstruction, each frame
+// gathered into the clips' vertex order as it is made.
+void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored) {
   const bool lossless = settings_.mode == RateMode::lossless;
   const std::vector<float>& targets = p_.trajectories.positions;
-  content_.residuals.assign(predictions_.size(), 0);
-  decoded.resize(predictions_.size());
+  const size_t row = p_.welded * 3;
+  content_.residuals.assign(p_.frames_total * row, 0);
+  std::vector<double> predicted(row);
+  std::vector<float> decoded(row);
+  const VertexGather to_vertices(p_.topology.welded_index);
   double inverse_step[3];
   for (int axis = 0; axis < 3; ++axis) inverse_step[axis] = 1.0 / double(content_.residual_step[axis]);
   ResidualReconstructor reconstructor(content_, p_.traversal);
-  const size_t row = p_.welded * 3;
   size_t frame = 0;
-  for (uint32_t frames_in_clip : content_.clip_frames) {
+  for (size_t c = 0; c < content_.clip_frames.size(); ++c) {
     reconstructor.start_clip();
-    for (uint32_t f = 0; f < frames_in_clip; ++f, ++frame) {
+    for (uint32_t f = 0; f < content_.clip_frames[c]; ++f, ++frame) {
       const size_t offset = frame * row;
+      predictions_->predict(frame, predicted.data());
       reconstructor.frame(
-          &predictions_[offset],
+          predicted.data(),
           [&](size_t i, double p, double r) -> int64_t {
             const float x = targets[offset + i];
             if (lossless) return content_.residuals[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
             return content_.residuals[offset + i] = quantizer_index((double(x) - p - r) * inverse_step[i % 3]);
           },
-          [&](size_t i, float x) { decoded[offset + i] = x; });
+          [&](size_t i, float x) { decoded[i] = x; });
+      to_vertices.gather(decoded.data(), restored[c].frame(f));
+      report_progress(settings_, "coding the residuals", double(frame + 1) / double(p_.frames_total));
     }
   }
+  report_progress(settings_, "writing the stream");
   stream.clear();
   write_stream(content_, p_.base, stream, &sizes_);
 }
 
-void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<float>& decoded) {
+void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored) {
   const auto start = EncodeClock::now();
-  encode_residuals(stream, decoded);
+  encode_residuals(stream, restored);
   if (settings_.mode == RateMode::bpvf) {
     // The rate estimate is an estimate: correct the residual budget by what the coder really produced until the
     // output lands within 3 % below the target.
@@ -254,7 +268,7 @@ void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<float>&
       choice_ = choose_budget();
       refine_steps(choice_, choose_budget);
       set_residual_steps();
-      encode_residuals(stream, decoded);
+      encode_residuals(stream, restored);
     }
   }
   report_.ms_entropy = milliseconds_since(start);
@@ -267,10 +281,11 @@ void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<float>&
 }  // namespace
 
 void code_stream(const EncodeProblem& problem, const Clusters& clusters, const AffineMotion& fitted,
-                 StreamContent& content, StreamReport& report, std::vector<uint8_t>& stream, std::vector<float>& decoded) {
+                 StreamContent& content, StreamReport& report, std::vector<uint8_t>& stream,
+                 std::vector<FrameSequence>& restored) {
   RateControlDriver driver(problem, clusters, fitted, content, report);
   driver.choose_steps();
-  driver.encode(stream, decoded);
+  driver.encode(stream, restored);
 }
 
 }  // namespace segmorph

@@ -14,9 +14,10 @@
 namespace segmorph {
 
 // Codes `content` (its clusters and labels set; `fitted`: their motion, unquantized) into `stream`: quantized motion
-// and weights, residual steps, residual symbols. `decoded` receives the frames a decoder will produce (F × W × 3, in
-// the welded order); `report` the steps, sizes and stage times.
+// and weights, residual steps, residual symbols. `restored` (the clips' shape, their positions sized) receives the
+// frames a decoder will produce, in the clips' vertex order; `report` the steps, sizes and stage times.
 void code_stream(const EncodeProblem& problem, const Clusters& clusters, const AffineMotion& fitted,
-                 StreamContent& content, StreamReport& report, std::vector<uint8_t>& stream, std::vector<float>& decoded);
+                 StreamContent& content, StreamReport& report, std::vector<uint8_t>& stream,
+                 std::vector<FrameSequence>& restored);
 
 }  // namespace segmorph

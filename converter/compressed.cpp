@@ -4,6 +4,9 @@
 #include "compressed.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
 
 #include "accessor.h"
 #include "bake.h"
@@ -74,6 +77,25 @@ CompressedPrimitive take_clips(tinygltf::Model& model, int host, AccessorWriter&
 
 }  // namespace
 
+CodecProgress codec_progress(const std::function<void(const std::string&)>& progress, const std::string& what) {
+  if (!progress) return {};
+  using Clock = std::chrono::steady_clock;
+  struct Last {
+    Clock::time_point time = Clock::now();
+    std::string stage;
+  };
+  auto last = std::make_shared<Last>();  // the settings holding the callback are copied
+  return [progress, what, last](const std::string& stage, double fraction) {
+    const Clock::time_point now = Clock::now();
+    const double since = std::chrono::duration<double>(now - last->time).count();
+    if (since < (stage != last->stage ? kCodecStageSeconds : kCodecProgressSeconds)) return;
+    last->time = now, last->stage = stage;
+    std::string line = what + ": " + stage;
+    if (fraction >= 0) line += " (" + std::to_string(int(std::floor(100 * std::min(fraction, 1.0)))) + " %)";
+    progress(line);
+  };
+}
+
 Status compress_model(tinygltf::Model& model, const std::vector<const SampledNode*>& sampled,
                       const CodecSettings& settings, const DracoSettings& draco, CompressReport& report,
                       const std::function<void(const std::string&)>& progress) {
@@ -113,6 +135,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<const SampledNod
       // The animation, against the base positions the decoder will have.
       CodecSettings primitive_settings = settings;
       primitive_settings.outside_bytes += encoding.draco_bytes.size();
+      primitive_settings.progress = codec_progress(progress, what);
       // The codec meets its error target on the frames it is given, in Draco's vertex order; verify measures
       // the decoded file against the original, where vertices Draco merged count once each and the morph-target
       // form adds its rounding (measured: up to 0.3 % above on the samples). Aim a little lower.

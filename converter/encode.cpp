@@ -206,11 +206,14 @@ size_t coded_bytes(const tinygltf::Model& model, int mesh, int primitive) {
 
 // The report's primitives and errors, measured as verify measures them: the encode decoded and compared with the
 // input's sampled frames.
-Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, EncodeReport& report) {
+Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, EncodeReport& report,
+               const Progress& progress) {
   const auto begin = std::chrono::steady_clock::now();
   SampledFile decoded;
   AnimationComparison comparison;
+  report_progress(progress, "measuring the encode against the input: decoding it");
   Status status = analyze_model(encoded.model, SampleSettings(), false, {}, decoded);
+  report_progress(progress, "measuring the encode against the input: comparing the frames");
   if (status.ok())
     status = compare_animation(file.model, file.scene, file.sampled, decoded.model, decoded.scene, comparison, true,
                                nullptr, threads);
@@ -316,8 +319,7 @@ Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinyglt
       break;
     }
   report = EncodeReport();
-  report_progress(progress, "measuring the encode against the input");
-  SEGMORPH_RETURN_IF_ERROR(measure(file, encoded, settings.threads, report));
+  SEGMORPH_RETURN_IF_ERROR(measure(file, encoded, settings.threads, report, progress));
   report.glb_bytes = glb_size(encoded.model);
   report.ms_tracks = encoded.ms_tracks;
   output = std::move(encoded.model);

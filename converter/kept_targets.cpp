@@ -82,6 +82,7 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
 
     CodecSettings target_settings = settings;
     target_settings.outside_bytes += encoding.draco_bytes.size();
+    target_settings.progress = codec_progress(progress, what);
     if (settings.mode == RateMode::bpvf) {
       // The rate is of the whole animation: its frames, not the targets, are what a vertex-frame counts, and
       // the primitive's vertices, not Draco's (copies merged, seams split).

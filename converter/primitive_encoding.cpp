@@ -98,6 +98,7 @@ Status encode_stream(const std::vector<FrameSequence>& reordered, const CodecSet
   encoding.report = StreamReport();
   SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, settings, encoding.stream,
                                             &encoding.report, &encoding.reconstruction));
+  if (settings.progress) settings.progress("checking that the stream decodes to the encoder's frames", -1);
   std::vector<FrameSequence> check;
   const Status check_status = decode_animation(encoding.stream.data(), encoding.stream.size(),
                                                decoded.attributes[0].values, decoded.triangles, check);

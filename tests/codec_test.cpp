@@ -3,9 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <string>
+#include <thread>
+#include <utility>
 
 #include "fuzz/fuzz_base_mesh.h"
 #include "gltf_io.h"
@@ -50,6 +54,43 @@ TEST(Codec, TwoEncodesAreByteIdentical) {
   const std::vector<FrameSequence> clips = {bending_clip(20, 0.8, 1)};
   const std::vector<float> base = quantized_base(clips[0]);
   EXPECT_EQ(encode(clips, base, CodecSettings()).stream, encode(clips, base, CodecSettings()).stream);
+}
+
+// Long encodes say where they are: every stage, the passes over every frame with their fraction done, always on the
+// calling thread (a caller prints from it), and the same bytes as without a listener.
+TEST(Codec, ProgressNamesEachStageOnTheCallingThread) {
+  const std::vector<FrameSequence> clips = {bending_clip(30, 1.0, 0)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  CodecSettings settings;
+  settings.threads = 2;
+  const Encoded quiet = encode(clips, base, settings);
+  std::vector<std::pair<std::string, double>> calls;
+  bool other_thread = false;
+  const std::thread::id caller = std::this_thread::get_id();
+  settings.progress = [&](const std::string& stage, double fraction) {
+    other_thread |= std::this_thread::get_id() != caller;
+    calls.emplace_back(stage, fraction);
+  };
+  EXPECT_EQ(encode(clips, base, settings).stream, quiet.stream);
+  EXPECT_FALSE(other_thread);
+  auto seen = [&](const std::string& prefix) {
+    return std::any_of(calls.begin(), calls.end(), [&](const auto& call) { return call.first.rfind(prefix, 0) == 0; });
+  };
+  for (const char* stage : {"segmentation: ", "cluster count: trying ", "motion fit", "rate control: quantizing",
+                            "rate control: measuring ", "coding the residuals", "writing the stream"})
+    EXPECT_TRUE(seen(stage)) << stage;
+  // Within a run of one stage the fraction only grows, to 1 for the passes over the frames (a pass starts at 0, and
+  // two passes in a row may measure as many steps).
+  for (size_t i = 0; i < calls.size(); ++i) {
+    EXPECT_LE(calls[i].second, 1.0) << calls[i].first;
+    const bool last_of_run = i + 1 == calls.size() || calls[i + 1].first != calls[i].first ||
+                             (calls[i].second == 1.0 && calls[i + 1].second == 0.0);
+    if (!last_of_run) {
+      EXPECT_LE(calls[i].second, calls[i + 1].second) << calls[i].first;
+    } else if (calls[i].first.rfind("rate control: measuring ", 0) == 0 || calls[i].first == "coding the residuals") {
+      EXPECT_EQ(calls[i].second, 1.0) << calls[i].first;
+    }
+  }
 }
 
 TEST(Codec, LosslessRestoresTheFloatsBitForBit) {
