@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -127,6 +128,7 @@ void RateControlDriver::prepare_motion(double motion_step) {
 // Bytes of the stream without residuals (header, welding, labels, motion, weights).
 size_t RateControlDriver::side_bytes() {
   content_.residuals.clear();
+  content_.narrow_residuals.clear();
   std::vector<uint8_t> side;
   write_stream(content_, p_.base, side);
   return side.size();
@@ -219,7 +221,14 @@ void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vect
   const bool lossless = settings_.mode == RateMode::lossless;
   const std::vector<float>& targets = p_.trajectories.positions;
   const size_t row = p_.welded * 3;
-  content_.residuals.assign(p_.frames_total * row, 0);
+  // Lossy indices kept in 32 bits (clamped there: the finest step keeps them far inside, kFinestStepBits).
+  std::vector<int64_t>& wide = content_.residuals;
+  std::vector<int32_t>& narrow = content_.narrow_residuals;
+  wide.clear(), narrow.clear();
+  if (lossless)
+    wide.resize(p_.frames_total * row);
+  else
+    narrow.resize(p_.frames_total * row);
   std::vector<double> predicted(row);
   std::vector<float> decoded(row);
   const VertexGather to_vertices(p_.topology.welded_index);
@@ -236,8 +245,9 @@ void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vect
           predicted.data(),
           [&](size_t i, double p, double r) -> int64_t {
             const float x = targets[offset + i];
-            if (lossless) return content_.residuals[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
-            return content_.residuals[offset + i] = quantizer_index((double(x) - p - r) * inverse_step[i % 3]);
+            if (lossless) return wide[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
+            const int64_t k = quantizer_index((double(x) - p - r) * inverse_step[i % 3]);
+            return narrow[offset + i] = int32_t(std::clamp<int64_t>(k, INT32_MIN + 1, INT32_MAX));
           },
           [&](size_t i, float x) { decoded[i] = x; });
       to_vertices.gather(decoded.data(), restored[c].frame(f));

@@ -134,7 +134,8 @@ inline DecodedSymbol decode_symbol(RangeDecoder& decoder, AxisModels& models, Hi
 
 }  // namespace
 
-void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residuals, size_t welded_count,
+template <typename Symbol>
+void encode_residuals(RangeEncoder& encoder, const std::vector<Symbol>& residuals, size_t welded_count,
                       [[maybe_unused]] bool lossless) {
   const size_t row = welded_count * 3;
   assert(row > 0 && residuals.size() % row == 0);
@@ -142,7 +143,7 @@ void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residua
   std::vector<History> history(row, 0);
   for (size_t frame = 0; frame < residuals.size() / row; ++frame) {
     for (size_t w = 0; w < welded_count; ++w) {
-      const int64_t* r = &residuals[frame * row + w * 3];
+      const Symbol* r = &residuals[frame * row + w * 3];
       History* h = &history[w * 3];
       const bool any = r[0] != 0 || r[1] != 0 || r[2] != 0;
       encoder.encode_bit(models.vertex[vertex_context(h)], any);
@@ -153,7 +154,7 @@ void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residua
         encode_symbol(encoder, models.axis[axis], h[axis], earlier, axis == 2 && !earlier,
                       in_int32 ? int32_t(r[axis]) : INT32_MIN);
         if (!in_int32) {
-          const uint64_t bits = uint64_t(r[axis]);
+          const uint64_t bits = uint64_t(int64_t(r[axis]));
           encoder.encode_direct_bits(uint32_t(bits >> 32), 32);
           encoder.encode_direct_bits(uint32_t(bits), 32);
         }
@@ -162,6 +163,9 @@ void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residua
     }
   }
 }
+
+template void encode_residuals(RangeEncoder&, const std::vector<int64_t>&, size_t, bool);
+template void encode_residuals(RangeEncoder&, const std::vector<int32_t>&, size_t, bool);
 
 ResidualDecoder::ResidualDecoder(size_t welded_count, bool lossless)
     : welded_count_(welded_count),

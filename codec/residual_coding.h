@@ -24,8 +24,10 @@
 namespace segmorph {
 
 // Appends the residual symbols to the encoder's stream. residuals: F × W × 3, frame by frame, welded vertex by
-// vertex, x y z (StreamContent::residuals); welded_count: W ≥ 1. Lossy residuals must lie in (INT32_MIN, INT32_MAX].
-void encode_residuals(RangeEncoder& encoder, const std::vector<int64_t>& residuals, size_t welded_count, bool lossless);
+// vertex, x y z (StreamContent::residuals, or its narrow_residuals: Symbol is int64_t or int32_t); welded_count:
+// W ≥ 1. Lossy residuals must lie in (INT32_MIN, INT32_MAX].
+template <typename Symbol>
+void encode_residuals(RangeEncoder& encoder, const std::vector<Symbol>& residuals, size_t welded_count, bool lossless);
 
 // Decodes the symbols encode_residuals wrote, a frame at a time, so that a decoder can turn each frame into positions
 // while it is in cache. Problems (an escape in a lossy stream, a magnitude outside int32, a non-canonical escape,

@@ -219,7 +219,8 @@ Status code_head(Coder& coder, Models& models, const std::vector<float>& base, S
 // that has residuals, the reader those of every stream.
 template <class Coder>
 Status code_residual_steps(Coder& coder, StreamContent& content) {
-  const bool checked = !(content.flags & format::kFlagLossless) && (Coder::kReading || !content.residuals.empty());
+  const bool checked = !(content.flags & format::kFlagLossless) &&
+                       (Coder::kReading || !content.residuals.empty() || !content.narrow_residuals.empty());
   for (int axis = 0; axis < 3; ++axis) {
     coder.float_bits(content.residual_step[axis]);
     if (checked && (!(content.residual_step[axis] > 0) || !std::isfinite(content.residual_step[axis])))
@@ -295,8 +296,14 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   // The table code's tables and initial states are written even without residuals (the encoder measures such
   // streams for the size of everything but the residuals); the adaptive code writes nothing then.
   std::vector<uint8_t> symbols;  // the table code's rANS words, after the body
-  if (table)
+  const bool narrow = !content.narrow_residuals.empty();
+  assert(!(narrow && (lossless || !content.residuals.empty())));
+  if (table && narrow)
+    encode_table_residuals(encoder, content.narrow_residuals, std::max<size_t>(content.welded_count, 1), symbols);
+  else if (table)
     encode_table_residuals(encoder, content.residuals, std::max<size_t>(content.welded_count, 1), symbols);
+  else if (narrow)
+    encode_residuals(encoder, content.narrow_residuals, content.welded_count, lossless);
   else if (!content.residuals.empty())
     encode_residuals(encoder, content.residuals, content.welded_count, lossless);
   encoder.finish();

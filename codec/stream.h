@@ -39,6 +39,9 @@ struct StreamContent {
   // differences of order-preserving float bit patterns.
   float residual_step[3] = {0, 0, 0};
   std::vector<int64_t> residuals;
+  // The same symbols of a lossy stream in half the memory, instead of `residuals` (the encoder's: lossy indices lie
+  // in (INT32_MIN, INT32_MAX]). write_stream codes whichever is not empty; read_stream fills `residuals`.
+  std::vector<int32_t> narrow_residuals;
 
   size_t frame_count() const;
 };

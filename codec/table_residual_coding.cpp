@@ -16,7 +16,8 @@ int clamped(int64_t value) {
 }
 
 // The symbol of a vertex's three residuals: 25 (x + 2) + 5 (y + 2) + (z + 2), each clamped to [−2, 2].
-int symbol_of(const int64_t* r) {
+template <typename Symbol>
+int symbol_of(const Symbol* r) {
   return (clamped(r[0]) + 2) * 25 + (clamped(r[1]) + 2) * 5 + clamped(r[2]) + 2;
 }
 
@@ -112,7 +113,8 @@ void normalize(const uint64_t* count, uint32_t* frequency) {
 
 }  // namespace
 
-void encode_table_residuals(RangeEncoder& body, const std::vector<int64_t>& residuals, size_t welded_count,
+template <typename Symbol>
+void encode_table_residuals(RangeEncoder& body, const std::vector<Symbol>& residuals, size_t welded_count,
                             std::vector<uint8_t>& symbols) {
   const size_t count = residuals.size() / 3;  // vertex-frames
   assert(welded_count > 0 && residuals.size() % (welded_count * 3) == 0);
@@ -120,7 +122,7 @@ void encode_table_residuals(RangeEncoder& body, const std::vector<int64_t>& resi
   std::vector<uint8_t> history(welded_count, 0);
   std::vector<uint64_t> counts(kContexts * kSymbols, 0);
   for (size_t i = 0; i < count; ++i) {
-    const int64_t* r = &residuals[i * 3];
+    const Symbol* r = &residuals[i * 3];
     for (int a = 0; a < 3; ++a) assert(r[a] > INT32_MIN && r[a] <= INT32_MAX);
     uint8_t& h = history[i % welded_count];
     symbol[i] = uint8_t(symbol_of(r));
@@ -176,6 +178,9 @@ void encode_table_residuals(RangeEncoder& body, const std::vector<int64_t>& resi
     symbols.push_back(uint8_t(reversed[j] >> 8));
   }
 }
+
+template void encode_table_residuals(RangeEncoder&, const std::vector<int64_t>&, size_t, std::vector<uint8_t>&);
+template void encode_table_residuals(RangeEncoder&, const std::vector<int32_t>&, size_t, std::vector<uint8_t>&);
 
 TableResidualDecoder::TableResidualDecoder(size_t welded_count, const uint8_t* symbols, size_t symbol_bytes)
     : welded_count_(welded_count),

@@ -35,10 +35,12 @@ constexpr size_t kMinSymbolBytes = 4 * kStates;  // the states' initial words
 constexpr size_t kVertexFramesPerByte = 376;
 }  // namespace table_code
 
-// Codes `residuals` (F × W × 3 lossy quantizer indices in (INT32_MIN, INT32_MAX]): the frequency tables and the
+// Codes `residuals` (F × W × 3 lossy quantizer indices in (INT32_MIN, INT32_MAX]; Symbol is int64_t or int32_t, as
+// StreamContent holds them): the frequency tables and the
 // magnitudes above 2 into `body` (the stream's range coder, after the residual steps), and the rANS words into
 // `symbols` (appended; the stream's bytes after the body).
-void encode_table_residuals(RangeEncoder& body, const std::vector<int64_t>& residuals, size_t welded_count,
+template <typename Symbol>
+void encode_table_residuals(RangeEncoder& body, const std::vector<Symbol>& residuals, size_t welded_count,
                             std::vector<uint8_t>& symbols);
 
 // The models of the magnitudes above 2, in the body: per axis, for each residual clamped to ±2, one adaptive bit
