@@ -139,7 +139,8 @@ const Option kOptions[] = {
      "restore the sampled frames bit for bit",
      [](CommandLine& line, const std::string&, double) { line.encode.mode = RateMode::lossless; }},
     {"--threads", "-t", "N", kEncode, Kind::whole, 0, 1024, false, nullptr, 0,
-     "threads for the encoding stages that split their work (rate control's measurements, the predictions), {range}; "
+     "threads for the encoding stages that split their work (the motion fits and refinement, rate control's "
+     "measurements, the comparison with the input), {range}; "
      "0 (default): every core, shared by the files of a batch that run at once (--jobs). The output is the same "
      "bytes for every N",
      [](CommandLine& line, const std::string&, double number) { line.encode.threads = size_t(number); }},

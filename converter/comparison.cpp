@@ -176,6 +176,7 @@ struct ComparisonInputs {
   std::vector<AnimatedNode> other_nodes;
   bool encoded_from_reference;
   const VertexMatches* matches;  // read only while nodes are compared
+  size_t vertex_threads = 1;     // for one primitive's vertex pairing: the threads the nodes leave
 };
 
 // One reference node compared: its primitives' comparisons, and the vertex pairings it made that `matches` lacked.
@@ -249,7 +250,7 @@ void compare_node(const ComparisonInputs& in, const SampledNode& want, NodeCompa
         match = &found->second;
     }
     if (!match) {
-      out.new_matches.push_back({{node.node, p}, match_vertices(a, b)});
+      out.new_matches.push_back({{node.node, p}, match_vertices(a, b, in.vertex_threads)});
       match = &out.new_matches.back().second;
     }
     PrimitiveComparison compared;
@@ -273,6 +274,7 @@ Status compare_animation(const tinygltf::Model& reference_model, const Scene& re
   evaluate_global_transforms(reference_model, reference_scene.graph, nullptr, 0, in.reference_global);
   evaluate_global_transforms(other_model, other_scene.graph, nullptr, 0, in.other_global);
   in.other_nodes = mesh_nodes(other_model, other_scene);
+  in.vertex_threads = std::max<size_t>(1, thread_count(threads) / std::max<size_t>(reference.size(), 1));
 
   // The nodes are compared on up to `threads` threads; their results are gathered in node order.
   std::vector<NodeComparison> nodes(reference.size());

@@ -6,11 +6,12 @@
 #include <unordered_map>
 
 #include "metrics.h"
+#include "parallel.h"
 
 namespace segmorph {
 
 std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference,
-                                     const std::vector<FrameSequence>& other) {
+                                     const std::vector<FrameSequence>& other, size_t threads) {
   assert(!reference.empty() && reference.size() == other.size() && other[0].vertex_count > 0);
   const size_t count = reference[0].vertex_count, other_count = other[0].vertex_count;
   std::vector<uint32_t> match(count);
@@ -57,42 +58,46 @@ std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference
       }
     return sum;
   };
-  for (uint32_t v = 0; v < count; ++v) {
-    const float* p = first + v * 3;
-    const int64_t centre[3] = {index(p[0]), index(p[1]), index(p[2])};
-    // Shells of cells outwards, from the first that meets the grid's box to the last: a vertex in shell r
-    // is at least (r - 1) cells away in the first frame alone, so the search also ends once that exceeds
-    // the best trajectory distance found. Only the part of a shell inside the box is visited.
-    int64_t near_shell = 0, far_shell = 0, from[3], to[3];
-    for (int k = 0; k < 3; ++k) {
-      near_shell = std::max({near_shell, low[k] - centre[k], centre[k] - high[k]});
-      far_shell = std::max({far_shell, centre[k] - low[k], high[k] - centre[k]});
-    }
-    double best = INFINITY;
-    uint32_t best_u = 0;
-    auto visit = [&](int64_t dx, int64_t dy, int64_t dz) {
-      const auto range = grid.equal_range(key(centre[0] + dx, centre[1] + dy, centre[2] + dz));
-      for (auto it = range.first; it != range.second; ++it) {
-        const double d = trajectory_distance(v, it->second, best);
-        if (d < best) best = d, best_u = it->second;
+  const auto match_range = [&](size_t begin, size_t end) {
+    for (uint32_t v = uint32_t(begin); v < end; ++v) {
+      const float* p = first + v * 3;
+      const int64_t centre[3] = {index(p[0]), index(p[1]), index(p[2])};
+      // Shells of cells outwards, from the first that meets the grid's box to the last: a vertex in shell r
+      // is at least (r - 1) cells away in the first frame alone, so the search also ends once that exceeds
+      // the best trajectory distance found. Only the part of a shell inside the box is visited.
+      int64_t near_shell = 0, far_shell = 0, from[3], to[3];
+      for (int k = 0; k < 3; ++k) {
+        near_shell = std::max({near_shell, low[k] - centre[k], centre[k] - high[k]});
+        far_shell = std::max({far_shell, centre[k] - low[k], high[k] - centre[k]});
       }
-    };
-    for (int64_t radius = near_shell; radius <= far_shell; ++radius) {
-      if (std::isfinite(best) && (double(radius) - 1) * cell > std::sqrt(best)) break;
-      for (int k = 0; k < 3; ++k)
-        from[k] = std::max(-radius, low[k] - centre[k]), to[k] = std::min(radius, high[k] - centre[k]);
-      for (int64_t dx = from[0]; dx <= to[0]; ++dx)
-        for (int64_t dy = from[1]; dy <= to[1]; ++dy) {
-          if (std::abs(dx) == radius || std::abs(dy) == radius) {
-            for (int64_t dz = from[2]; dz <= to[2]; ++dz) visit(dx, dy, dz);
-          } else {
-            if (from[2] == -radius) visit(dx, dy, -radius);
-            if (to[2] == radius) visit(dx, dy, radius);
-          }
+      double best = INFINITY;
+      uint32_t best_u = 0;
+      auto visit = [&](int64_t dx, int64_t dy, int64_t dz) {
+        const auto range = grid.equal_range(key(centre[0] + dx, centre[1] + dy, centre[2] + dz));
+        for (auto it = range.first; it != range.second; ++it) {
+          const double d = trajectory_distance(v, it->second, best);
+          if (d < best) best = d, best_u = it->second;
         }
+      };
+      for (int64_t radius = near_shell; radius <= far_shell; ++radius) {
+        if (std::isfinite(best) && (double(radius) - 1) * cell > std::sqrt(best)) break;
+        for (int k = 0; k < 3; ++k)
+          from[k] = std::max(-radius, low[k] - centre[k]), to[k] = std::min(radius, high[k] - centre[k]);
+        for (int64_t dx = from[0]; dx <= to[0]; ++dx)
+          for (int64_t dy = from[1]; dy <= to[1]; ++dy) {
+            if (std::abs(dx) == radius || std::abs(dy) == radius) {
+              for (int64_t dz = from[2]; dz <= to[2]; ++dz) visit(dx, dy, dz);
+            } else {
+              if (from[2] == -radius) visit(dx, dy, -radius);
+              if (to[2] == radius) visit(dx, dy, radius);
+            }
+          }
+      }
+      match[v] = best_u;
     }
-    match[v] = best_u;
-  }
+  };
+  // Each vertex's search reads the grid and the frames only: the vertices are split over threads.
+  parallel_ranges(count, thread_count(threads), match_range);
   return match;
 }
 

@@ -13,8 +13,9 @@ namespace segmorph {
 // the same times, any vertex order and count, at least one vertex) whose trajectory is nearest: the least
 // sum of squared distances over every frame of every clip. That is the pairing under which the other's
 // error is smallest, so quantization that moves vertices past their neighbours cannot mislead it (a nearest
-// first frame would). Identity when the two have the same vertex count and first frame.
+// first frame would). Identity when the two have the same vertex count and first frame. The vertices are matched on
+// up to `threads` threads (0: every hardware thread), with the same result for any number.
 std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference,
-                                     const std::vector<FrameSequence>& other);
+                                     const std::vector<FrameSequence>& other, size_t threads = 1);
 
 }  // namespace segmorph
