@@ -28,7 +28,7 @@ import { SWEEPS, sweepFile } from './lib/rate_distortion.mjs';
 import { writeReport } from './lib/report.mjs';
 import { SCALING, measureScaling } from './lib/scaling.mjs';
 import { LARGE, measureLarge } from './lib/large.mjs';
-import { benchmarkCodec, measureFile } from './lib/speed.mjs';
+import { CORES, benchmarkCodec, measureFile } from './lib/speed.mjs';
 import { measureBrowser } from './lib/browser.mjs';
 import { StepError, Tools, buildSource, gltfFiles, machine, progress, revision } from './lib/tools.mjs';
 import { checkQuick } from './lib/quick_checks.mjs';
@@ -127,6 +127,7 @@ async function main() {
     const repeats = options.quick ? 1 : 3;
     await runPart('speed', options, tools, () => ({
       repeats,
+      cores: CORES,
       files: files.map(({ label, file }, i) => {
         progress(`speed ${i + 1}/${files.length}: ${label}`);
         return { label, result: measureFile(tools, file, folder('speed', i, label), repeats) };

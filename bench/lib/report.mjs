@@ -193,14 +193,48 @@ function bpvfTargets(rd, lines) {
 // Vertex-frames per second of a whole command.
 const throughput = (shape, wallMs) => (shape ? `${(shape.vertex_frames / (wallMs / 1000) / 1e6).toFixed(1)} M` : '—');
 
+// One thread against every core: per stage, the time summed over the files (the sequences, and every file), and the
+// speedup; the encode's wall time too.
+function threadSpeedups(speed, print, flags) {
+  const measured = speed.files.filter((f) => !f.result.failed && f.result.encode_one_thread);
+  if (measured.length === 0) return;
+  const cores = speed.cores ?? 0;
+  print('### Threads');
+  print();
+  print(`The same encodes with \`--threads 1\` against the default (every core: ${cores} here), each run ${speed.repeats === 1 ? 'once' : `${speed.repeats} times`} ` +
+        'and the median run\'s stage times summed over the files, and the speedup (one thread\'s time over every ' +
+        'core\'s). The output is the same bytes for every thread count: the harness compares the two files of each input ' +
+        'and flags any that differ. The stages that split their work over threads are the per-frame motion fits, the ' +
+        'rate control\'s measurements (its candidate steps), the motion refinement\'s vertex moves, the comparison\'s ' +
+        'nodes and vertex pairing; the rest (the eigensolver, the entropy coder, Draco) runs on one.');
+  print();
+  const groups = [['sequences', measured.filter((f) => f.label.startsWith('sequences/'))], ['every file', measured]];
+  print(`| stage | ${groups.map(([name]) => `${name}: 1 thread | ${cores} threads | speedup`).join(' | ')} |`);
+  print(`|---|${groups.map(() => '---|---|---|').join('')}`);
+  const sum = (files, get) => files.reduce((total, f) => total + (get(f) ?? 0), 0);
+  const rows = [...STAGES.map((s) => [s.replace('_', ' '), (e) => e.stages[s]]), ['whole encode (wall)', (e) => e.wall_ms]];
+  for (const [name, get] of rows) {
+    const cells = groups.map(([, files]) => {
+      const one = sum(files, (f) => get(f.result.encode_one_thread)), all = sum(files, (f) => get(f.result.encode));
+      return `${ms(one)} ms | ${ms(all)} ms | ${all > 0 ? (one / all).toFixed(2) + '×' : '—'}`;
+    });
+    print(`| ${name} | ${cells.join(' | ')} |`);
+  }
+  print();
+  if (speed.files.some((f) => !f.result.failed && !f.result.encode_one_thread))
+    flags.push('speed: some files have no one-thread measurement (results from an older harness)');
+}
+
 function speedAndMemory(speed, shapes, charts, lines, flags) {
   const print = (line = '') => lines.push(line);
   print('## Speed and memory');
   print();
   print(`Per file, each command run ${speed.repeats} times under \`run_measured\` (bench/run_measured.cpp: wall time, ` +
         'user + system CPU time and the peak resident set from wait4), median wall and CPU time, largest peak memory. ' +
-        `segmorph \`encode --error ${SPEED_ERROR}\` (its default; the stage times are those its --json reports for the ` +
-        'median run, summed over primitives; "rest": loading, sampling, baking, the check that the stream decodes to the ' +
+        `segmorph \`encode --error ${SPEED_ERROR}\` (its default, on every core; the stage times are those its --json reports ` +
+        'for the median run, summed over primitives: "segmentation" includes the cluster count\'s search and the motion ' +
+        'refinement, "tracks" the coding of node tracks and the kept skins\' search, "measure" the decoding of the encode ' +
+        'and its comparison with the input; "rest": loading, sampling, baking, the check that the stream decodes to the ' +
         'encoder\'s frames, writing), segmorph `decode` of that file (reading, Draco, the animation, writing standard morph ' +
         `targets; its throughput counts the input's vertex-frames over the whole command), and gltfpack \`-cc -af 0 -vp ${SPEED_GLTFPACK_BITS}\` on the same input (a Node.js process: WebAssembly).`);
   print();
@@ -233,6 +267,7 @@ function speedAndMemory(speed, shapes, charts, lines, flags) {
     print();
   }
 
+  threadSpeedups(speed, print, flags);
   if (speed.codec.length === 0) return;
   print('### The codec alone (Google Benchmark)');
   print();

@@ -1,13 +1,17 @@
-// Speed and memory of one input: segmorph encode (per stage, from its --json) and decode, gltfpack on the same
-// file in the same run, each repeated and the median wall time kept; and, for the sequences, Google Benchmark
+// Speed and memory of one input: segmorph encode (per stage, from its --json) on every core and on one thread (the
+// same bytes, checked) and decode, gltfpack on the same file in the same run, each repeated and the median wall time
+// kept; and, for the sequences, Google Benchmark
 // of the codec's stages (bench/codec_benchmark), whose decoder figures give the throughput in vertex-frames per
 // second next to a plain copy of the restored frames.
 
 import { mkdirSync, readFileSync } from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import { progress } from './tools.mjs';
 
-export const STAGES = ['segmentation', 'motion', 'prediction', 'rate_control', 'entropy', 'draco'];
+export const STAGES = ['segmentation', 'motion', 'prediction', 'rate_control', 'entropy', 'draco', 'tracks', 'measure'];
+// The encode's default thread count (every core), which the speed part compares with one thread.
+export const CORES = os.availableParallelism ? os.availableParallelism() : os.cpus().length;
 export const SPEED_ERROR = 0.15;  // segmorph's default target
 export const SPEED_GLTFPACK_BITS = 12;
 
@@ -30,7 +34,8 @@ export function repeated(tools, log, command, args, repeats) {
 
 const pick = ({ wall_ms, cpu_ms, max_rss_kb }) => ({ wall_ms, cpu_ms, max_rss_kb });
 
-// { encode: { wall_ms, cpu_ms, max_rss_kb, stages: { name: ms }, bytes }, decode: {...}, gltfpack: {...}, failed }
+// { encode: { wall_ms, cpu_ms, max_rss_kb, stages: { name: ms }, bytes }, encode_one_thread: { the same },
+//   decode: {...}, gltfpack: {...}, failed }
 export function measureFile(tools, input, dir, repeats) {
   mkdirSync(dir, { recursive: true });
   const encoded = path.join(dir, 'encoded.glb');
@@ -38,6 +43,14 @@ export function measureFile(tools, input, dir, repeats) {
                           ['encode', '-q', input, '-o', encoded, '--error', String(SPEED_ERROR), '--json'], repeats);
   if (!encode.ok) return { failed: `segmorph encode failed (${encode.log})` };
   const report = JSON.parse(encode.stdout.trim().split('\n').pop());
+  const single = path.join(dir, 'encoded-one-thread.glb');
+  const one = repeated(tools, path.join(dir, 'encode-one-thread.log'), 'segmorph',
+                       ['encode', '-q', input, '-o', single, '--error', String(SPEED_ERROR), '--json', '--threads', '1'],
+                       repeats);
+  if (!one.ok) return { failed: `segmorph encode --threads 1 failed (${one.log})` };
+  if (!readFileSync(single).equals(readFileSync(encoded)))
+    return { failed: `segmorph encode --threads 1 wrote other bytes than on ${CORES} threads (${single})` };
+  const oneReport = JSON.parse(one.stdout.trim().split('\n').pop());
   const decode = repeated(tools, path.join(dir, 'decode.log'), 'segmorph',
                           ['decode', '-q', encoded, '-o', path.join(dir, 'decoded.glb')], repeats);
   if (!decode.ok) return { failed: `segmorph decode failed (${decode.log})` };
@@ -46,6 +59,7 @@ export function measureFile(tools, input, dir, repeats) {
   if (!gltfpack.ok) return { failed: `gltfpack failed (${gltfpack.log})` };
   return {
     encode: { ...pick(encode), stages: report.milliseconds, bytes: report.bytes },
+    encode_one_thread: { ...pick(one), stages: oneReport.milliseconds },
     decode: pick(decode),
     gltfpack: pick(gltfpack),
   };
