@@ -424,7 +424,8 @@ function scalingPart(scaling, charts, lines, flags) {
   print('`build/bench/codec_scaling --vertices V --frames F` (bench/codec_scaling.cpp): a torus of about V vertices ' +
         '(one closed surface, 2V triangles) whose ring and tube swell in travelling waves while it bends, twists and ' +
         `drifts, generated in memory; encoded at the default --error ${SPEED_ERROR} against a stand-in base, decoded, ` +
-        'measured. One process per point. Times are wall clock; "draco" is the Draco encoding, decoding and vertex ' +
+        'measured. One process per point, with glibc\'s large buffers on transparent huge pages ' +
+        '(`GLIBC_TUNABLES=glibc.malloc.hugetlb=1`, as the segmorph tool asks for itself). Times are wall clock; "draco" is the Draco encoding, decoding and vertex ' +
         'matching of the base mesh the container does; peak memory is the process\'s peak resident set while building ' +
         'the frames ("input"), during the encoder and during the decoder (reset between them).');
   print();
@@ -454,6 +455,17 @@ function scalingPart(scaling, charts, lines, flags) {
   print();
   table(result.byVertices);
   growth(result.byVertices, (p) => p.vertices, 'against V');
+  const largest = result.byVertices[result.byVertices.length - 1];
+  if (largest) {
+    const t = largest.milliseconds, share = (x) => `${(100 * x / t.encode).toFixed(0)} %`;
+    print(`Where it stops: at V = ${largest.vertices} the segmentation stage takes ${share(t.segmentation)} of the ` +
+          'encoder\'s time (it also holds the cluster count\'s search and the motion refinement; its heat-diffusion ' +
+          'eigenpairs, two sparse LDLᵀ factorizations and a Lanczos iteration, run on one core), ' +
+          `the rate control ${share(t.rate_control)}; the encoder's peak is ` +
+          `${(largest.peak_rss_kb.encode * 1024 / (largest.vertices * largest.frames)).toFixed(0)} bytes per ` +
+          'vertex-frame (the frames themselves are 12).');
+    print();
+  }
   print(`### Against F (V ≈ ${plan.fixedVertices})`);
   print();
   table(result.byFrames);

@@ -1,12 +1,13 @@
 // How the codec's time and memory grow with V (F fixed) and with F (V fixed): bench/codec_scaling, one process
-// per point (its peak memory is the process's).
+// per point (its peak memory is the process's), with glibc's large buffers on transparent huge pages as the
+// segmorph tool asks for itself (converter/main.cpp).
 
 import { mkdirSync } from 'node:fs';
 import path from 'node:path';
 import { progress } from './tools.mjs';
 
 export const SCALING = {
-  full: { vertices: [2000, 8000, 32000, 128000, 200000, 300000], fixedFrames: 100,
+  full: { vertices: [2000, 8000, 32000, 128000, 200000, 300000, 600000, 1000000], fixedFrames: 100,
           frames: [25, 50, 100, 200, 400], fixedVertices: 32000 },
   quick: { vertices: [500, 2000], fixedFrames: 10, frames: [5, 10], fixedVertices: 500 },
 };
@@ -23,7 +24,8 @@ export function measureScaling(tools, dir, plan) {
   const run = (vertices, frames) => {
     const started = Date.now();
     const result = tools.run(path.join(dir, `v${vertices}-f${frames}.log`), 'codec_scaling',
-                             ['--vertices', String(vertices), '--frames', String(frames)]);
+                             ['--vertices', String(vertices), '--frames', String(frames)],
+                             { GLIBC_TUNABLES: 'glibc.malloc.hugetlb=1' });
     if (!result.ok) throw new Error(`codec_scaling --vertices ${vertices} --frames ${frames} failed (${path.join(dir, `v${vertices}-f${frames}.log`)})`);
     progress(`  scaling: V ${vertices} × F ${frames}: ${((Date.now() - started) / 1000).toFixed(1)} s`);
     return JSON.parse(result.stdout);

@@ -46,14 +46,16 @@ export class Tools {
 
   // Runs `command args` (command: a tool name of this.paths, or a program) under run_measured. Writes
   // LOG (stdout and stderr) and LOG's .time.json. Returns { ok, stdout, time: { wall_ms, user_ms, sys_ms,
-  // max_rss_kb } }; never throws for a failing command (ok is false, the log says why).
-  run(log, command, args) {
+  // max_rss_kb } }; never throws for a failing command (ok is false, the log says why). `env`: variables added to
+  // the command's environment.
+  run(log, command, args, env = {}) {
     const program = this.paths[command] || command;
     const argv = program.endsWith('.js') || program.endsWith('.mjs') ? [process.execPath, program, ...args] : [program, ...args];
     const timeFile = `${log}.time.json`;
     const result = spawnSync(this.paths.run_measured, [timeFile, '--', ...argv],
-                             { encoding: 'utf8', maxBuffer: 1 << 28, cwd: this.root });
-    writeFileSync(log, `$ ${argv.join(' ')}\n${result.stdout || ''}${result.stderr || ''}`);
+                             { encoding: 'utf8', maxBuffer: 1 << 28, cwd: this.root, env: { ...process.env, ...env } });
+    const assignments = Object.entries(env).map(([name, value]) => `${name}=${value} `).join('');
+    writeFileSync(log, `$ ${assignments}${argv.join(' ')}\n${result.stdout || ''}${result.stderr || ''}`);
     const time = existsSync(timeFile) ? JSON.parse(readFileSync(timeFile, 'utf8')) : null;
     return { ok: result.status === 0, stdout: result.stdout || '', time };
   }
