@@ -81,15 +81,18 @@ CodecProgress codec_progress(const std::function<void(const std::string&)>& prog
   if (!progress) return {};
   using Clock = std::chrono::steady_clock;
   struct Last {
-    Clock::time_point time = Clock::now();
-    std::string stage;
+    Clock::time_point start = Clock::now(), time = start;  // the primitive's start, the last line's time
+    std::string stage;                                      // the last stage reported
   };
   auto last = std::make_shared<Last>();  // the settings holding the callback are copied
   return [progress, what, last](const std::string& stage, double fraction) {
     const Clock::time_point now = Clock::now();
-    const double since = std::chrono::duration<double>(now - last->time).count();
-    if (since < (stage != last->stage ? kCodecStageSeconds : kCodecProgressSeconds)) return;
-    last->time = now, last->stage = stage;
+    const bool quiet = std::chrono::duration<double>(now - last->start).count() < kCodecQuietSeconds;
+    const bool new_stage = stage != last->stage;
+    last->stage = stage;
+    if (quiet || (!new_stage && std::chrono::duration<double>(now - last->time).count() < kCodecProgressSeconds))
+      return;
+    last->time = now;
     std::string line = what + ": " + stage;
     if (fraction >= 0) line += " (" + std::to_string(int(std::floor(100 * std::min(fraction, 1.0)))) + " %)";
     progress(line);

@@ -24,10 +24,10 @@ struct CompressReport {
 };
 
 // The codec's progress on a primitive (`what`: "mesh 1 primitive 0") as lines through `progress`, "mesh 1 primitive
-// 0: rate control: measuring 12 steps (40 %)": a new stage once kCodecStageSeconds have passed since the last line,
-// the fraction done once kCodecProgressSeconds have. Work that takes less says nothing more than the line that
-// announced it.
-constexpr double kCodecStageSeconds = 0.5, kCodecProgressSeconds = 2.0;
+// 0: rate control: measuring 12 steps (40 %)": nothing for the first kCodecQuietSeconds (a primitive encoded sooner
+// says nothing more than the line that announced it), then each new stage as it starts and the fraction done of a
+// stage at most every kCodecProgressSeconds.
+constexpr double kCodecQuietSeconds = 2.0, kCodecProgressSeconds = 2.0;
 CodecProgress codec_progress(const std::function<void(const std::string&)>& progress, const std::string& what);
 
 // `model` has just been baked (bake_model) from `sampled`. Replaces each baked primitive's morph targets by a

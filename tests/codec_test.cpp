@@ -76,7 +76,10 @@ TEST(Codec, ProgressNamesEachStageOnTheCallingThread) {
   auto seen = [&](const std::string& prefix) {
     return std::any_of(calls.begin(), calls.end(), [&](const auto& call) { return call.first.rfind(prefix, 0) == 0; });
   };
-  for (const char* stage : {"segmentation: ", "cluster count: trying ", "motion fit", "rate control: quantizing",
+  for (const char* stage : {"segmentation: heat diffusion", "segmentation: eigenpairs: factorizing",
+                            "segmentation: eigenpairs: Lanczos iteration", "segmentation: feature points",
+                            "segmentation: Morse levels", "cluster count: trying ",
+                            "motion refinement", "motion fit", "rate control: quantizing",
                             "rate control: measuring ", "coding the residuals", "writing the stream"})
     EXPECT_TRUE(seen(stage)) << stage;
   // Within a run of one stage the fraction only grows, to 1 for the passes over the frames (a pass starts at 0, and

@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "bake.h"
 #include "comparison.h"
@@ -93,6 +97,23 @@ std::string grid_with_copies(const std::string& name, const std::vector<uint32_t
 // vertex, and a vertex only such triangles use would go with it, and its animation (a grid with 400 copies in
 // such triangles measured KG 28 %). Grid 8 × 8 (98 triangles), plus a copy of vertex 0 in a triangle with vertex
 // 0, and three copies of vertex 5 forming a triangle of their own: every triangle and every motion survives.
+// The codec's progress as printed: nothing in a primitive's first seconds, then each new stage and a stage's
+// fraction at most every kCodecProgressSeconds.
+TEST(Compressed, CodecProgressIsQuietAtFirstThenNamesEachStage) {
+  std::vector<std::string> lines;
+  const CodecProgress report =
+      codec_progress([&](const std::string& line) { lines.push_back(line); }, "mesh 0 primitive 0");
+  report("segmentation: heat diffusion", -1);
+  EXPECT_TRUE(lines.empty());
+  std::this_thread::sleep_for(std::chrono::duration<double>(kCodecQuietSeconds + 0.1));
+  report("rate control: measuring 12 steps", 0.25);
+  report("rate control: measuring 12 steps", 0.5);  // the same stage, too soon
+  report("writing the stream", -1);
+  EXPECT_EQ(lines, (std::vector<std::string>{"mesh 0 primitive 0: rate control: measuring 12 steps (25 %)",
+                                             "mesh 0 primitive 0: writing the stream"}));
+  EXPECT_FALSE(codec_progress({}, "mesh 0 primitive 0"));  // no printer, no callback
+}
+
 TEST(Compressed, CopiesMergeButNeverTwoCornersOfOneTriangle) {
   const std::string path = grid_with_copies("copies.gltf", {0, 5, 5, 5}, {0, 64, 1, 65, 66, 67});
   tinygltf::Model model = encoded(path);

@@ -463,7 +463,8 @@ function scalingPart(scaling, charts, lines, flags) {
           'eigenpairs, two sparse LDLᵀ factorizations and a Lanczos iteration, run on one core), ' +
           `the rate control ${share(t.rate_control)}; the encoder's peak is ` +
           `${(largest.peak_rss_kb.encode * 1024 / (largest.vertices * largest.frames)).toFixed(0)} bytes per ` +
-          'vertex-frame (the frames themselves are 12).');
+          'vertex-frame (the frames themselves are 12' +
+          `${largest.peak_reset === false ? '; the peak could not be reset after building the frames: it includes that' : ''}).`);
     print();
   }
   print(`### Against F (V ≈ ${plan.fixedVertices})`);

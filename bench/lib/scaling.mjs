@@ -12,6 +12,13 @@ export const SCALING = {
   quick: { vertices: [500, 2000], fixedFrames: 10, frames: [5, 10], fixedVertices: 500 },
 };
 
+// GLIBC_TUNABLES with glibc.malloc.hugetlb=1 added to what the environment sets.
+function hugePages() {
+  const tunables = process.env.GLIBC_TUNABLES ?? '';
+  if (tunables.includes('glibc.malloc.hugetlb')) return tunables;
+  return tunables === '' ? 'glibc.malloc.hugetlb=1' : `${tunables}:glibc.malloc.hugetlb=1`;
+}
+
 // { byVertices: [point], byFrames: [point] } (codec_scaling's JSON objects), or { failed }.
 export function measureScaling(tools, dir, plan) {
   mkdirSync(dir, { recursive: true });
@@ -25,7 +32,7 @@ export function measureScaling(tools, dir, plan) {
     const started = Date.now();
     const result = tools.run(path.join(dir, `v${vertices}-f${frames}.log`), 'codec_scaling',
                              ['--vertices', String(vertices), '--frames', String(frames)],
-                             { GLIBC_TUNABLES: 'glibc.malloc.hugetlb=1' });
+                             { GLIBC_TUNABLES: hugePages() });
     if (!result.ok) throw new Error(`codec_scaling --vertices ${vertices} --frames ${frames} failed (${path.join(dir, `v${vertices}-f${frames}.log`)})`);
     progress(`  scaling: V ${vertices} × F ${frames}: ${((Date.now() - started) / 1000).toFixed(1)} s`);
     return JSON.parse(result.stdout);

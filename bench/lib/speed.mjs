@@ -10,8 +10,9 @@ import path from 'node:path';
 import { progress } from './tools.mjs';
 
 export const STAGES = ['segmentation', 'motion', 'prediction', 'rate_control', 'entropy', 'draco', 'tracks', 'measure'];
-// The encode's default thread count (every core), which the speed part compares with one thread.
-export const CORES = os.availableParallelism ? os.availableParallelism() : os.cpus().length;
+// The encode's default thread count (every core: std::thread::hardware_concurrency, which counts the online
+// processors as os.cpus does, whatever the affinity), which the speed part compares with one thread.
+export const CORES = os.cpus().length;
 export const SPEED_ERROR = 0.15;  // segmorph's default target
 export const SPEED_GLTFPACK_BITS = 12;
 

@@ -171,8 +171,9 @@ struct EncodeSettings {
   enum class Targets { automatic, keep, bake } targets = Targets::automatic;
   // The residuals in the table code of stream version 2: faster decoding, larger files. Lossy encodes only.
   bool fast_decode = false;
-  // Threads for the stages that split their work (the residual steps' measurement of rate control, the predictions);
-  // 0: every hardware thread. The output is the same bytes for every number.
+  // Threads for the stages that split their work (the motion fits and refinement, the residual steps' measurement of
+  // rate control, the comparison with the input); 0: every hardware thread. The output is the same bytes for every
+  // number.
   size_t threads = 0;
 };
 
