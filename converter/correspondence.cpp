@@ -5,13 +5,29 @@
 #include <cmath>
 #include <unordered_map>
 
-#include "metrics.h"
 #include "parallel.h"
 
 namespace segmorph {
+namespace {
+
+// Each vertex's position averaged over every frame of every clip.
+std::vector<double> mean_positions(const std::vector<FrameSequence>& clips) {
+  const size_t count = clips[0].vertex_count;
+  std::vector<double> sum(count * 3, 0.0);
+  size_t frames = 0;
+  for (const FrameSequence& clip : clips)
+    for (size_t f = 0; f < clip.frame_count; ++f, ++frames) {
+      const float* frame = clip.frame(f);
+      for (size_t i = 0; i < count * 3; ++i) sum[i] += frame[i];
+    }
+  for (double& value : sum) value /= double(frames);
+  return sum;
+}
+
+}  // namespace
 
 std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference,
-                                     const std::vector<FrameSequence>& other, size_t threads) {
+                                     const std::vector<FrameSequence>& other, size_t threads, size_t held_bytes) {
   assert(!reference.empty() && reference.size() == other.size() && other[0].vertex_count > 0);
   const size_t count = reference[0].vertex_count, other_count = other[0].vertex_count;
   std::vector<uint32_t> match(count);
@@ -22,49 +38,108 @@ std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference
     return match;
   }
 
-  // A grid of the other's first-frame positions, cells about the mean spacing of the vertices.
-  const double diagonal = bounding_box_diagonal(other_first, other_count);
-  const double cell = diagonal > 0 ? diagonal / std::max(1.0, std::cbrt(double(other_count))) : 1.0;
+  // Each vertex's position averaged over every frame: by Jensen's inequality, the trajectory distance of v and u
+  // (a sum over F frames of squared distances) is at least F times the squared distance of their means, a bound that
+  // tightens with F where the first frame's alone would not.
+  size_t frames = 0;
+  for (const FrameSequence& clip : reference) frames += clip.frame_count;
+  const std::vector<double> means = mean_positions(reference), other_means = mean_positions(other);
+
+  // A grid of the other's means, found in a table by cell. The cells start at about the mean spacing of points filling
+  // the box and halve while the occupied cells hold more than two points each (a surface's points fill few cells)
+  // and halving still spreads them.
+  double box_low[3] = {INFINITY, INFINITY, INFINITY}, box_high[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (size_t i = 0; i < other_count * 3; ++i) {
+    box_low[i % 3] = std::min(box_low[i % 3], other_means[i]);
+    box_high[i % 3] = std::max(box_high[i % 3], other_means[i]);
+  }
+  const double diagonal = std::hypot(box_high[0] - box_low[0], box_high[1] - box_low[1], box_high[2] - box_low[2]);
+  double cell = diagonal > 0 ? diagonal / std::max(1.0, std::cbrt(double(other_count))) : 1.0;
   // Clamped so that far outliers cannot overflow; clamping only brings a point nearer the grid's box.
   auto index = [&](double x) { return int64_t(std::clamp(std::floor(x / cell), -1e15, 1e15)); };
   auto key = [](int64_t x, int64_t y, int64_t z) {
     return uint64_t(x * 73856093) ^ uint64_t(y * 19349663) ^ uint64_t(z * 83492791);
   };
-  std::unordered_multimap<uint64_t, uint32_t> grid;
+  std::vector<std::pair<uint64_t, uint32_t>> cells(other_count);
+  auto place = [&] {
+    for (uint32_t u = 0; u < other_count; ++u) {
+      const double* m = &other_means[size_t(u) * 3];
+      cells[u] = {key(index(m[0]), index(m[1]), index(m[2])), u};
+    }
+    std::sort(cells.begin(), cells.end());
+    size_t occupied = 0;
+    for (size_t i = 0; i < cells.size(); ++i) occupied += i == 0 || cells[i].first != cells[i - 1].first;
+    return occupied;
+  };
+  for (size_t occupied = place(), halvings = 0; occupied * 2 < other_count && halvings < 16; ++halvings) {
+    cell /= 2;
+    const size_t finer = place();
+    if (finer * 2 < occupied * 3) {  // the points no longer spread: keep the coarser cells
+      cell *= 2;
+      place();
+      break;
+    }
+    occupied = finer;
+  }
+  std::unordered_map<uint64_t, std::pair<uint32_t, uint32_t>> grid;  // cell -> range of `cells`
   grid.reserve(other_count);
   int64_t low[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, high[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
-  for (uint32_t u = 0; u < other_count; ++u) {
-    int64_t cell_index[3];
+  std::vector<double> cell_means(other_count * 3);  // the means in `cells` order
+  for (uint32_t i = 0; i < other_count; ++i) {
+    const double* m = &other_means[size_t(cells[i].second) * 3];
     for (int k = 0; k < 3; ++k) {
-      cell_index[k] = index(other_first[u * 3 + size_t(k)]);
-      low[k] = std::min(low[k], cell_index[k]);
-      high[k] = std::max(high[k], cell_index[k]);
+      cell_means[size_t(i) * 3 + size_t(k)] = m[k];
+      low[k] = std::min(low[k], index(m[k]));
+      high[k] = std::max(high[k], index(m[k]));
     }
-    grid.emplace(key(cell_index[0], cell_index[1], cell_index[2]), u);
+    auto& range = grid.try_emplace(cells[i].first, i, i).first->second;
+    range.second = i + 1;
   }
 
-  auto distance2 = [](const float* a, const float* b) {
+  // Every frame of every clip in order; the other's first `held` frames copied vertex by vertex (as far as
+  // held_bytes allows), where most candidates are decided, so that a candidate's trajectory is read contiguously.
+  std::vector<const float*> reference_frames, other_frames;
+  for (size_t c = 0; c < reference.size(); ++c)
+    for (size_t f = 0; f < reference[c].frame_count; ++f) {
+      reference_frames.push_back(reference[c].frame(f));
+      other_frames.push_back(other[c].frame(f));
+    }
+  const size_t held = std::min(frames, std::max<size_t>(1, held_bytes / (other_count * 3 * sizeof(float))));
+  std::vector<float> other_held(other_count * held * 3);
+  for (size_t f = 0; f < held; ++f)
+    for (size_t u = 0; u < other_count; ++u)
+      for (size_t k = 0; k < 3; ++k) other_held[(u * held + f) * 3 + k] = other_frames[f][u * 3 + k];
+
+  // The trajectory distance of v (its frames in `track`) and u, or a value > bound as soon as it is known to exceed
+  // it.
+  auto trajectory_distance = [&](const float* track, uint32_t u, double bound) {
+    auto add = [](double& sum, const float* a, const float* b) {
+      for (int k = 0; k < 3; ++k) sum += (double(a[k]) - b[k]) * (double(a[k]) - b[k]);
+    };
     double sum = 0;
-    for (int c = 0; c < 3; ++c) sum += (double(a[c]) - b[c]) * (double(a[c]) - b[c]);
+    const float* candidate = &other_held[size_t(u) * held * 3];
+    for (size_t f = 0; f < held; ++f) {
+      add(sum, track + f * 3, candidate + f * 3);
+      if (sum > bound) return sum;
+    }
+    for (size_t f = held; f < frames; ++f) {
+      add(sum, track + f * 3, other_frames[f] + size_t(u) * 3);
+      if (sum > bound) return sum;
+    }
     return sum;
   };
-  // The trajectory distance of v and u, or a value >= bound as soon as it is known to reach it.
-  auto trajectory_distance = [&](uint32_t v, uint32_t u, double bound) {
-    double sum = 0;
-    for (size_t c = 0; c < reference.size(); ++c)
-      for (size_t f = 0; f < reference[c].frame_count; ++f) {
-        sum += distance2(reference[c].frame(f) + v * 3, other[c].frame(f) + u * 3);
-        if (sum >= bound) return sum;
-      }
-    return sum;
-  };
+  // The bounds are loosened by a relative 1e-9 so that rounding cannot skip a candidate that ties or wins.
+  constexpr double kSlack = 1 + 1e-9;
   const auto match_range = [&](size_t begin, size_t end) {
+    std::vector<float> track(frames * 3);  // v's trajectory
     for (uint32_t v = uint32_t(begin); v < end; ++v) {
-      const float* p = first + v * 3;
-      const int64_t centre[3] = {index(p[0]), index(p[1]), index(p[2])};
-      // Shells of cells outwards, from the first that meets the grid's box to the last: a vertex in shell r
-      // is at least (r - 1) cells away in the first frame alone, so the search also ends once that exceeds
-      // the best trajectory distance found. Only the part of a shell inside the box is visited.
+      for (size_t f = 0; f < frames; ++f)
+        for (size_t k = 0; k < 3; ++k) track[f * 3 + k] = reference_frames[f][size_t(v) * 3 + k];
+      const double* m = &means[size_t(v) * 3];
+      const int64_t centre[3] = {index(m[0]), index(m[1]), index(m[2])};
+      // Shells of cells outwards, from the first that meets the grid's box to the last: a mean in shell r is at
+      // least (r - 1) cells away, so the search ends once F times that squared exceeds the best trajectory distance
+      // found. Only the part of a shell inside the box is visited. Ties go to the lowest u, whatever the order.
       int64_t near_shell = 0, far_shell = 0, from[3], to[3];
       for (int k = 0; k < 3; ++k) {
         near_shell = std::max({near_shell, low[k] - centre[k], centre[k] - high[k]});
@@ -72,15 +147,39 @@ std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference
       }
       double best = INFINITY;
       uint32_t best_u = 0;
-      auto visit = [&](int64_t dx, int64_t dy, int64_t dz) {
-        const auto range = grid.equal_range(key(centre[0] + dx, centre[1] + dy, centre[2] + dz));
-        for (auto it = range.first; it != range.second; ++it) {
-          const double d = trajectory_distance(v, it->second, best);
-          if (d < best) best = d, best_u = it->second;
-        }
+      auto consider = [&](uint32_t i) {  // the other's vertex cells[i]
+        const double* n = &cell_means[size_t(i) * 3];
+        double apart = 0;
+        for (int k = 0; k < 3; ++k) apart += (m[k] - n[k]) * (m[k] - n[k]);
+        if (double(frames) * apart > best * kSlack) return;
+        const uint32_t u = cells[i].second;
+        const double d = trajectory_distance(track.data(), u, best);
+        if (d < best || (d == best && u < best_u)) best = d, best_u = u;
       };
+      auto visit = [&](int64_t dx, int64_t dy, int64_t dz) {
+        const auto found = grid.find(key(centre[0] + dx, centre[1] + dy, centre[2] + dz));
+        if (found != grid.end())
+          for (uint32_t i = found->second.first; i < found->second.second; ++i) consider(i);
+      };
+      // How many cells within `radius` of the centre lie inside the box (in double: a far outlier's box is vast).
+      auto box_cells = [&](int64_t radius) {
+        double product = 1;
+        for (int k = 0; k < 3; ++k)
+          product *= double(std::max<int64_t>(0, std::min(radius, high[k] - centre[k]) -
+                                                     std::max(-radius, low[k] - centre[k]) + 1));
+        return product;
+      };
+      // Far from any good match (files that do not correspond), shells of empty cells could outnumber the other's
+      // vertices many times over: once they would, every vertex is considered instead.
+      double visited = 0;
       for (int64_t radius = near_shell; radius <= far_shell; ++radius) {
-        if (std::isfinite(best) && (double(radius) - 1) * cell > std::sqrt(best)) break;
+        if (std::isfinite(best) && (double(radius) - 1) * cell > std::sqrt(best / double(frames)) * kSlack) break;
+        const double shell = box_cells(radius) - (radius > 0 ? box_cells(radius - 1) : 0);
+        if (visited + shell > 2 * double(other_count)) {
+          for (uint32_t i = 0; i < other_count; ++i) consider(i);
+          break;
+        }
+        visited += shell;
         for (int k = 0; k < 3; ++k)
           from[k] = std::max(-radius, low[k] - centre[k]), to[k] = std::min(radius, high[k] - centre[k]);
         for (int64_t dx = from[0]; dx <= to[0]; ++dx)
