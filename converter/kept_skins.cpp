@@ -72,10 +72,11 @@ Status measured_kg(const SampledFile& file, const std::vector<SampledNode>& refe
 Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kept_skins, tinygltf::Model& model,
                    TrackCoding& coding, const Progress& progress) {
   coding = TrackCoding();
-  const double first = kTrackDistanceRatio * error_target(codec) / 100 * scene_diagonal(model);
+  const double diagonal = scene_diagonal(model);
+  const double first = kTrackDistanceRatio * error_target(codec) / 100 * diagonal;
   auto encode = [&](double distance, tinygltf::Model& result) {  // in place
     TrackReport report;
-    SEGMORPH_RETURN_IF_ERROR(compress_tracks(result, TrackPrecision{distance}, report));
+    SEGMORPH_RETURN_IF_ERROR(compress_tracks(result, TrackPrecision{distance, diagonal}, report));
     coding.bytes = report.bytes;
     return Status::Ok();
   };
@@ -88,12 +89,15 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
     for (size_t c = 0; c < subsample[n].primitives[0].clips.size(); ++c)
       whole = whole && subsample[n].primitives[0].clips[c].frame_count ==
                            file.sampled[n].primitives[0].clips[c].frame_count;
-  tinygltf::Model candidate;
+  // The encodes differ in their tracks only: their meshes are decoded from Draco once, and their vertices pair as
+  // the first's.
+  tinygltf::Model meshes = model, candidate;
+  SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(meshes));
   double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
   int measurements = 0;
-  VertexMatches matches;  // the encodes differ in their tracks only: their vertices pair as the first's
+  VertexMatches matches;
   auto within_goal = [&](double distance, bool every_frame, bool& ok) {
-    candidate = model;
+    candidate = meshes;
     SEGMORPH_RETURN_IF_ERROR(encode(distance, candidate));
     SEGMORPH_RETURN_IF_ERROR(
         measured_kg(file, every_frame ? file.sampled : subsample, std::move(candidate), matches, codec.threads, kg));

@@ -285,7 +285,7 @@ Status compress_tracks(tinygltf::Model& model, const TrackPrecision& precision, 
   SEGMORPH_RETURN_IF_ERROR(build_node_graph(model, graph));
   std::vector<Eigen::Matrix4d> global;
   evaluate_global_transforms(model, graph, nullptr, 0, global);
-  const double diagonal = scene_diagonal(model);
+  const double diagonal = precision.diagonal > 0 ? precision.diagonal : scene_diagonal(model);
   for (size_t a = 0; a < model.animations.size(); ++a)
     SEGMORPH_RETURN_IF_ERROR(compress_animation(model, a, precision, diagonal, graph, global, report));
   if (report.samplers > 0) declare_extension(model, kExtensionName, true);

@@ -16,6 +16,7 @@ namespace segmorph {
 // twice its components'), a scale's distance / (D / 2), a translation's distance over its parent's world scale.
 struct TrackPrecision {
   double distance = 0;
+  double diagonal = 0;  // D; 0: scene_diagonal of the model coded
 };
 
 // The diagonal of the bounding box of every mesh of `model` at rest (each node's mesh bounds under its static
