@@ -59,8 +59,9 @@ struct DecodedSizes {
   size_t coded_animations = 0;  // animations whose tracks were coded
 };
 
-// Replaces KHR_draco_mesh_compression primitives by plain accessors (the first step of decode_compressed_model).
-Status decode_draco_primitives(tinygltf::Model& model);
+// Replaces KHR_draco_mesh_compression primitives by plain accessors (the first step of decode_compressed_model),
+// decoding up to `threads` primitives at once (0: every hardware thread); the model written is the same for any.
+Status decode_draco_primitives(tinygltf::Model& model, size_t threads = 1);
 
 // Replaces KHR_draco_mesh_compression primitives by plain accessors, then decodes SEGMORPH_animation_compression
 // primitives with the runtime decoder (include/segmorph/decoder.h): those that keep morph targets get them back, the

@@ -8,6 +8,7 @@
 #include "bake.h"
 #include "compressed.h"
 #include "normals.h"
+#include "parallel.h"
 #include "primitive_encoding.h"
 #include "segmorph/decoder.h"
 #include "segmorph_extension.h"
@@ -161,43 +162,77 @@ Status write_decoded_attribute(const BaseMeshAttribute& attribute, const std::st
 
 }  // namespace
 
-Status decode_draco_primitives(tinygltf::Model& model) {
-  AccessorWriter writer(model);
-  for (size_t m = 0; m < model.meshes.size(); ++m)
-    for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
+Status decode_draco_primitives(tinygltf::Model& model, size_t threads) {
+  // The primitives to decode, in order, up to the first that cannot be (its error comes after theirs).
+  struct Job {
+    tinygltf::Primitive* primitive;
+    std::string what;
+    DracoPrimitive draco;
+    std::vector<unsigned char> bytes;  // copied: writing the decoded accessors may move the model's buffer
+    BaseMesh decoded;
+    Status status;
+  };
+  std::vector<Job> jobs;
+  Status refused;
+  for (size_t m = 0; m < model.meshes.size() && refused.ok(); ++m)
+    for (size_t p = 0; p < model.meshes[m].primitives.size() && refused.ok(); ++p) {
       tinygltf::Primitive& primitive = model.meshes[m].primitives[p];
       auto it = primitive.extensions.find(kDracoExtensionName);
       if (it == primitive.extensions.end()) continue;
-      const std::string what = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
-      if (primitive.mode != -1 && primitive.mode != TINYGLTF_MODE_TRIANGLES)
-        return Status(StatusCode::unsupported,
-                      what + ": only triangle primitives are read from KHR_draco_mesh_compression (mode " +
-                          std::to_string(primitive.mode) + ")");
-      DracoPrimitive draco;
-      SEGMORPH_RETURN_IF_ERROR(parse_draco_primitive(it->second, draco));
+      Job job;
+      job.primitive = &primitive;
+      job.what = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
+      if (primitive.mode != -1 && primitive.mode != TINYGLTF_MODE_TRIANGLES) {
+        refused = Status(StatusCode::unsupported,
+                         job.what + ": only triangle primitives are read from KHR_draco_mesh_compression (mode " +
+                             std::to_string(primitive.mode) + ")");
+        break;
+      }
       const unsigned char* data = nullptr;
       size_t size = 0;
-      SEGMORPH_RETURN_IF_ERROR(
-          buffer_view_bytes(model, draco.buffer_view, what + " " + kDracoExtensionName, &data, &size));
-      BaseMesh decoded;
-      const Status status = decode_draco_base_mesh(data, size, draco.attributes, decoded);
-      if (!status.ok()) return Status(status.code(), what + ": " + status.message());
+      refused = parse_draco_primitive(it->second, job.draco);
+      if (refused.ok())
+        refused = buffer_view_bytes(model, job.draco.buffer_view, job.what + " " + kDracoExtensionName, &data, &size);
+      if (!refused.ok()) break;
+      job.bytes.assign(data, data + size);
+      jobs.push_back(std::move(job));
+    }
+  // Decoded a batch at a time (each primitive on a thread of its own), then written in order.
+  const size_t batch = thread_count(threads);
+  AccessorWriter writer(model);
+  for (size_t first = 0; first < jobs.size(); first += batch) {
+    const size_t count = std::min(batch, jobs.size() - first);
+    parallel_ranges(count, batch, [&](size_t begin, size_t end) {
+      for (size_t j = first + begin; j < first + end; ++j) {
+        Job& job = jobs[j];
+        job.status = decode_draco_base_mesh(job.bytes.data(), job.bytes.size(), job.draco.attributes, job.decoded);
+      }
+    });
+    for (size_t j = first; j < first + count; ++j) {
+      Job& job = jobs[j];
+      tinygltf::Primitive& primitive = *job.primitive;
+      const BaseMesh& decoded = job.decoded;
+      if (!job.status.ok()) return Status(job.status.code(), job.what + ": " + job.status.message());
       for (const BaseMeshAttribute& attribute : decoded.attributes) {
         auto accessor = primitive.attributes.find(attribute.semantic);
         if (accessor == primitive.attributes.end() || accessor->second < 0 ||
             size_t(accessor->second) >= model.accessors.size() ||
             model.accessors[size_t(accessor->second)].count != decoded.vertex_count)
           return Status(StatusCode::bad_data,
-                        what + ": Draco's " + attribute.semantic + " disagrees with its accessor");
-        SEGMORPH_RETURN_IF_ERROR(write_decoded_attribute(attribute, what, writer, model, accessor->second));
+                        job.what + ": Draco's " + attribute.semantic + " disagrees with its accessor");
+        SEGMORPH_RETURN_IF_ERROR(write_decoded_attribute(attribute, job.what, writer, model, accessor->second));
       }
       if (primitive.indices >= 0 && (size_t(primitive.indices) >= model.accessors.size() ||
                                      model.accessors[size_t(primitive.indices)].count != decoded.triangles.size()))
-        return Status(StatusCode::bad_data, what + ": Draco's triangles disagree with the indices accessor");
+        return Status(StatusCode::bad_data, job.what + ": Draco's triangles disagree with the indices accessor");
       primitive.indices = writer.add_indices(decoded.triangles);
       primitive.mode = TINYGLTF_MODE_TRIANGLES;
-      primitive.extensions.erase(it);
+      primitive.extensions.erase(kDracoExtensionName);
+      job.decoded = BaseMesh();
+      job.bytes = std::vector<unsigned char>();
     }
+  }
+  SEGMORPH_RETURN_IF_ERROR(refused);
   undeclare_extension(model, kDracoExtensionName);
   return Status::Ok();
 }

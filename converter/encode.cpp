@@ -104,7 +104,7 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
     if (moving[m] && !skin) out.rigid_meshes.push_back(int(m));
   }
   SEGMORPH_RETURN_IF_ERROR(
-      compress_moving_meshes(out.model, moving, choices.draco, step_ratio, rigid_spread, meshes));
+      compress_moving_meshes(out.model, moving, choices.draco, step_ratio, rigid_spread, codec.threads, meshes));
   out.report.draco_bytes += meshes.bytes;
   say(kept_skins.empty() ? "coding the animation tracks" : "coding the animation tracks, measuring the kept skins' error");
   TrackCoding tracks;
@@ -212,7 +212,9 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
   SampledFile decoded;
   AnimationComparison comparison;
   report_progress(progress, "measuring the encode against the input: decoding it");
-  Status status = analyze_model(encoded.model, SampleSettings(), false, {}, decoded);
+  tinygltf::Model model = encoded.model;
+  Status status = decode_draco_primitives(model, threads);  // on every thread; analyze_model decodes the rest
+  if (status.ok()) status = analyze_model(std::move(model), SampleSettings(), false, {}, decoded);
   report_progress(progress, "measuring the encode against the input: comparing the frames");
   if (status.ok())
     status = compare_animation(file.model, file.scene, file.sampled, decoded.model, decoded.scene, comparison, true,

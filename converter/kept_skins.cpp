@@ -92,7 +92,7 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
   // The encodes differ in their tracks only: their meshes are decoded from Draco once, and their vertices pair as
   // the first's.
   tinygltf::Model meshes = model, candidate;
-  SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(meshes));
+  SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(meshes, codec.threads));
   double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
   int measurements = 0;
   VertexMatches matches;

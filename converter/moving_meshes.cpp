@@ -2,10 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "accessor.h"
 #include "animation.h"
 #include "compressed.h"
+#include "parallel.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {
@@ -137,24 +141,31 @@ int component_type_of(const BaseMeshAttribute& attribute) {
   }
 }
 
-Status compress_primitive(tinygltf::Model& model, tinygltf::Primitive& primitive, const std::string& what,
-                          DracoSettings settings, double step_ratio, double rigid_spread, MovingMeshReport& report) {
-  BaseMesh original;
-  SEGMORPH_RETURN_IF_ERROR(read_primitive(model, primitive, what, original));
-  std::vector<uint32_t> first;
-  const BaseMesh mesh = merge_copies(original, {}, first);
-  const bool skinned = primitive.attributes.count("JOINTS_0") > 0;
-  settings.share_values = true;
-  if (settings.position_bits == 0)
-    settings.position_bits = position_bits_for(mesh.attributes[0].values, step_ratio, skinned ? 0 : rigid_spread);
+// One primitive's Draco coding: what compress_primitive computes from the read mesh, before writing it to the model.
+struct CodedPrimitive {
+  tinygltf::Primitive* primitive = nullptr;
+  std::string what;
+  BaseMesh mesh;  // read, copies merged
+  DracoSettings settings;
   std::vector<uint8_t> bytes;
   DracoPrimitive draco;
-  Status status = encode_draco_base_mesh(mesh, settings, bytes, draco.attributes);
   BaseMesh decoded;
-  if (status.ok()) status = decode_draco_base_mesh(bytes.data(), bytes.size(), draco.attributes, decoded);
-  if (!status.ok()) return Status(status.code(), what + ": " + status.message());
+  Status status;
+};
 
-  // The accessors describe what Draco decodes to; POSITION keeps its bounds, as glTF requires.
+// Encodes `coded.mesh` with Draco and decodes it back (no model is touched: runs on any thread).
+void code_primitive(CodedPrimitive& coded) {
+  Status status = encode_draco_base_mesh(coded.mesh, coded.settings, coded.bytes, coded.draco.attributes);
+  if (status.ok()) status = decode_draco_base_mesh(coded.bytes.data(), coded.bytes.size(), coded.draco.attributes,
+                                                   coded.decoded);
+  if (!status.ok()) coded.status = Status(status.code(), coded.what + ": " + status.message());
+}
+
+// Writes a coded primitive to the model: the accessors describe what Draco decodes to; POSITION keeps its bounds, as
+// glTF requires.
+void write_primitive(tinygltf::Model& model, const CodedPrimitive& coded, MovingMeshReport& report) {
+  tinygltf::Primitive& primitive = *coded.primitive;
+  const BaseMesh& decoded = coded.decoded;
   AccessorWriter writer(model);
   for (const BaseMeshAttribute& attribute : decoded.attributes) {
     if (attribute.semantic == "POSITION") {
@@ -172,11 +183,11 @@ Status compress_primitive(tinygltf::Model& model, tinygltf::Primitive& primitive
   }
   primitive.indices = writer.add_described_indices(decoded.triangles.size(), decoded.vertex_count);
   primitive.mode = TINYGLTF_MODE_TRIANGLES;
-  draco.buffer_view = writer.add_view(bytes.data(), bytes.size(), 0);
+  DracoPrimitive draco = coded.draco;
+  draco.buffer_view = writer.add_view(coded.bytes.data(), coded.bytes.size(), 0);
   primitive.extensions[kDracoExtensionName] = draco_primitive_value(draco);
   ++report.primitives;
-  report.bytes += bytes.size();
-  return Status::Ok();
+  report.bytes += coded.bytes.size();
 }
 
 }  // namespace
@@ -218,7 +229,7 @@ std::vector<bool> moving_meshes(const tinygltf::Model& model, const std::vector<
 }
 
 Status compress_moving_meshes(tinygltf::Model& model, const std::vector<bool>& meshes, const DracoSettings& settings,
-                              double step_ratio, double rigid_spread, MovingMeshReport& report) {
+                              double step_ratio, double rigid_spread, size_t threads, MovingMeshReport& report) {
   // rigid_spread is in model units; a mesh's positions are in those of its node (the first that uses it).
   NodeGraph graph;
   SEGMORPH_RETURN_IF_ERROR(build_node_graph(model, graph));
@@ -230,20 +241,51 @@ Status compress_moving_meshes(tinygltf::Model& model, const std::vector<bool>& m
     if (mesh < 0 || size_t(mesh) >= scale.size() || scale[size_t(mesh)] > 0) continue;
     scale[size_t(mesh)] = largest_scale(global[n]);
   }
-  bool any = false;
+  // The primitives in order; read and coded a batch of `threads` at once (each coded on a thread of its own), then
+  // written in order. Writing appends accessors and views, never meshes: the primitive pointers stay valid.
+  std::vector<std::pair<tinygltf::Primitive*, std::string>> primitives;
+  std::vector<double> spreads;
   for (size_t m = 0; m < meshes.size() && m < model.meshes.size(); ++m) {
     if (!meshes[m]) continue;
     const double mesh_spread = scale[m] > 0 && std::isfinite(scale[m]) ? rigid_spread / scale[m] : 0;
     for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
-      // compress_primitive appends accessors and views, never meshes: the reference stays valid.
-      tinygltf::Primitive& primitive = model.meshes[m].primitives[p];
-      SEGMORPH_RETURN_IF_ERROR(compress_primitive(model, primitive,
-                                                  "mesh " + std::to_string(m) + " primitive " + std::to_string(p),
-                                                  settings, step_ratio, mesh_spread, report));
-      any = true;
+      primitives.emplace_back(&model.meshes[m].primitives[p], "mesh " + std::to_string(m) + " primitive " +
+                                                                  std::to_string(p));
+      spreads.push_back(mesh_spread);
     }
   }
-  if (any) declare_extension(model, kDracoExtensionName, true);
+  const size_t batch = thread_count(threads);
+  for (size_t start = 0; start < primitives.size(); start += batch) {
+    std::vector<CodedPrimitive> coded;
+    Status unread;  // a primitive that cannot be read ends the batch; its error comes after the earlier ones'
+    for (size_t i = start; i < std::min(start + batch, primitives.size()) && unread.ok(); ++i) {
+      CodedPrimitive one;
+      one.primitive = primitives[i].first;
+      one.what = primitives[i].second;
+      one.settings = settings;
+      one.settings.share_values = true;
+      BaseMesh original;
+      unread = read_primitive(model, *one.primitive, one.what, original);
+      if (!unread.ok()) break;
+      std::vector<uint32_t> first;
+      one.mesh = merge_copies(original, {}, first);
+      const bool skinned = one.primitive->attributes.count("JOINTS_0") > 0;
+      if (one.settings.position_bits == 0)
+        one.settings.position_bits =
+            position_bits_for(one.mesh.attributes[0].values, step_ratio, skinned ? 0 : spreads[i]);
+      coded.push_back(std::move(one));
+    }
+    parallel_ranges(coded.size(), batch, [&](size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) code_primitive(coded[i]);
+    });
+    for (CodedPrimitive& one : coded) {
+      SEGMORPH_RETURN_IF_ERROR(one.status);
+      write_primitive(model, one, report);
+      one = CodedPrimitive();
+    }
+    SEGMORPH_RETURN_IF_ERROR(unread);
+  }
+  if (!primitives.empty()) declare_extension(model, kDracoExtensionName, true);
   return Status::Ok();
 }
 

@@ -27,8 +27,9 @@ struct MovingMeshReport {
 // step about `step_ratio` times a spread, which puts the quantization's share of the KG error near
 // 50 × step_ratio %. A skinned mesh's spread is its own (the RMS distance of its vertices from their centroid:
 // the KG of the primitive divides by it); a rigid mesh's is `rigid_spread`, that of the whole it is a part of.
-// The accessors keep their counts and POSITION its bounds, without data.
+// The accessors keep their counts and POSITION its bounds, without data. Up to `threads` primitives are coded at once
+// (0: every hardware thread), with the same model written for any number.
 Status compress_moving_meshes(tinygltf::Model& model, const std::vector<bool>& meshes, const DracoSettings& settings,
-                              double step_ratio, double rigid_spread, MovingMeshReport& report);
+                              double step_ratio, double rigid_spread, size_t threads, MovingMeshReport& report);
 
 }  // namespace segmorph
