@@ -7,10 +7,13 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cassert>
+#include <chrono>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <new>
 #include <string>
+#include <utility>
 
 namespace segmorph {
 namespace {
@@ -39,19 +42,30 @@ SparseMatrix plus_mass(const SparseMatrix& stiffness, const Eigen::VectorXd& mas
 // Spectra's operator for y = P (K − σM)⁻¹ z, z = M x, on the M-orthogonal complement of the locked
 // vectors Φ (P = I − ΦΦᵀM; z is projected as M P x = z − MΦΦᵀz). With no locked vectors it is the plain
 // shift-invert solve. The factorization of K − σM is computed beforehand; Spectra's set_shift, called
-// while its solver is constructed, only passes the same σ.
+// while its solver is constructed, only passes the same σ. `solved` is told the number of solves so far, at most
+// every `report_seconds`.
 class ShiftedCholeskySolve {
  public:
   using Scalar = double;
 
-  ShiftedCholeskySolve(const Factorization& factorization, const Eigen::VectorXd& mass, const Eigen::MatrixXd& locked)
-      : factorization_(factorization), mass_(mass), locked_(locked), mass_locked_(mass.asDiagonal() * locked) {}
+  ShiftedCholeskySolve(const Factorization& factorization, const Eigen::VectorXd& mass, const Eigen::MatrixXd& locked,
+                       std::function<void(size_t solves)> solved, double report_seconds)
+      : factorization_(factorization), mass_(mass), locked_(locked), mass_locked_(mass.asDiagonal() * locked),
+        solved_(std::move(solved)), report_seconds_(report_seconds), reported_(std::chrono::steady_clock::now()) {}
 
   Eigen::Index rows() const { return mass_.size(); }
   Eigen::Index cols() const { return mass_.size(); }
   void set_shift(double) {}
 
   void perform_op(const double* x_in, double* y_out) const {
+    ++solves_;
+    if (solved_) {
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - reported_).count() >= report_seconds_) {
+        reported_ = now;
+        solved_(solves_);
+      }
+    }
     Eigen::Map<const Eigen::VectorXd> z(x_in, rows());
     Eigen::Map<Eigen::VectorXd> y(y_out, rows());
     if (locked_.cols() == 0) {
@@ -68,6 +82,10 @@ class ShiftedCholeskySolve {
   const Eigen::VectorXd& mass_;
   const Eigen::MatrixXd& locked_;
   const Eigen::MatrixXd mass_locked_;  // MΦ
+  const std::function<void(size_t)> solved_;
+  const double report_seconds_;
+  mutable size_t solves_ = 0;  // Spectra calls perform_op on a const operator
+  mutable std::chrono::steady_clock::time_point reported_;
 };
 
 // Spectra's operator for y = M x, M diagonal; it also defines the M inner product of the Lanczos basis.
@@ -119,7 +137,13 @@ Status lanczos(const Factorization& factorization, const Eigen::VectorXd& mass, 
     return Status(StatusCode::numerical, "eigensolver: " + std::to_string(count) + " more eigenpairs asked of a " +
                                              std::to_string(n - locked.cols()) + "-dimensional space");
   }
-  ShiftedCholeskySolve solve(factorization, mass, locked);
+  std::function<void(size_t)> solved;
+  if (settings.progress)
+    solved = [&](size_t solves) {
+      settings.progress("eigenpairs: Lanczos iteration, " + std::to_string(solves) + " solves (" + std::to_string(n) +
+                        " vertices)");
+    };
+  ShiftedCholeskySolve solve(factorization, mass, locked, std::move(solved), settings.solve_report_seconds);
   DiagonalMassProduct mass_product(mass);
   // Spectra's own fixed-seed start vector (the same input gives the same output), without locked parts.
   Eigen::VectorXd start = Spectra::SimpleRandom<double>(0).random_vec(n);

@@ -51,8 +51,11 @@ struct EigenSettings {
   // Spectra's convergence test: each Ritz value ν = 1/(λ − σ) has a residual below tolerance · |ν|.
   double tolerance = 1e-10;
   int max_restarts = 1000;  // implicit restarts of the Lanczos iteration before giving up
-  // Told each step of the shift-invert search ("factorizing", "Lanczos iteration", ...); empty: nothing.
+  // Told each step of the shift-invert search ("factorizing", "Lanczos iteration", ...); empty: nothing. The Lanczos
+  // iteration, whose length is not known ahead, also tells how many solves it has made, at most every
+  // `solve_report_seconds`.
   std::function<void(const std::string& step)> progress;
+  double solve_report_seconds = 2;
 };
 
 // Shift of the shift-invert mode: σ = −kShiftAreaFraction / (Σ mass). The first nonzero eigenvalue of a

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "laplacian.h"
 #include "topology.h"
@@ -344,6 +346,25 @@ TEST(Eigensolver, CountIsClampedAndShiftInvertLimitIsAStatus) {
             StatusCode::invalid_argument);
   EXPECT_TRUE(smallest_eigenpairs(laplacian.stiffness, laplacian.mass, 0, unused).ok());
   EXPECT_EQ(unused.values.size(), 0);
+}
+
+TEST(Eigensolver, ProgressNamesEachStepAndCountsTheSolves) {
+  // Reported at every solve here (solve_report_seconds 0): the counts rise by one from 1.
+  const CotangentLaplacian laplacian = build(icosphere(3));
+  EigenSettings settings;
+  settings.method = EigenMethod::shift_invert;
+  settings.solve_report_seconds = 0;
+  std::vector<std::string> steps;
+  settings.progress = [&](const std::string& step) { steps.push_back(step); };
+  Eigenpairs pairs;
+  ASSERT_TRUE(smallest_eigenpairs(laplacian.stiffness, laplacian.mass, 12, pairs, settings).ok());
+  ASSERT_GE(steps.size(), 3u);
+  EXPECT_EQ(steps[0], "eigenpairs: factorizing (642 vertices)");
+  EXPECT_EQ(steps[1], "eigenpairs: Lanczos iteration (642 vertices)");
+  size_t solves = 0;
+  for (size_t i = 2; i < steps.size() && steps[i].find(" solves ") != std::string::npos; ++i)
+    EXPECT_EQ(steps[i], "eigenpairs: Lanczos iteration, " + std::to_string(++solves) + " solves (642 vertices)");
+  EXPECT_GT(solves, 12u);
 }
 
 TEST(Eigensolver, NoConvergenceIsANumericalStatus) {
