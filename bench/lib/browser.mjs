@@ -1,7 +1,7 @@
 // The browser part: what a web page pays for a sequence, segmorph's file against gltfpack's at the same error.
-// For each sequence: segmorph encode --error SPEED_ERROR; gltfpack -cc -af 0 swept over -vp, the smallest file at
-// equal or lower KG (measured by segmorph verify after meshopt_decode.mjs) as the anchor; both files' bytes raw, after
-// gzip -9 and after brotli -q 11; then, in headless Chromium (Debian's, driven by playwright-core, pages served by
+// For each sequence: segmorph encode --error SPEED_ERROR; gltfpack -cc -af 0 swept over -vp, the file smallest after
+// brotli -q 11 at equal or lower KG (measured by segmorph verify after meshopt_decode.mjs) as the anchor; both files'
+// bytes raw, after gzip -9 and after brotli -q 11; then, in headless Chromium (Debian's, driven by playwright-core, pages served by
 // web/serve.mjs on 127.0.0.1), the time GLTFLoader takes from the bytes to a scene ready to play (segmorph: the
 // plugin and DRACOLoader; gltfpack: MeshoptDecoder), the first load in the page and the median of the next ones, and
 // the decoder's own share. Time to the first played frame over a link: brotli bytes / link rate + that time.
@@ -26,7 +26,7 @@ function files(tools, input, dir, quick) {
   const report = tools.verify(local('segmorph.verify.log'), input, encoded);
   if (!report) return { failed: `segmorph verify failed (${local('segmorph.verify.log')})` };
   const segmorph = { file: encoded, kg: report.kg_percent, vertex_frames: report.vertex_frames, ...deliveredBytes(encoded) };
-  // gltfpack: the smallest file whose KG is at most segmorph's (else the one of lowest KG, said so).
+  // gltfpack: the file smallest after brotli whose KG is at most segmorph's (else the one of lowest KG, said so).
   const candidates = [];
   for (const bits of GLTFPACK_BITS[quick ? 'quick' : 'full']) {
     const name = `gltfpack-vp${bits}`;
@@ -36,8 +36,8 @@ function files(tools, input, dir, quick) {
     if (measured) candidates.push({ file: local(`${name}.glb`), setting: `-cc -af 0 -vp ${bits}`, kg: measured.kg_percent });
   }
   if (candidates.length === 0) return { failed: `gltfpack failed at every -vp (${dir})` };
-  const equal = candidates.filter((c) => c.kg <= segmorph.kg);
-  const anchor = equal.length ? equal.reduce((a, b) => (fileBytes(b.file) < fileBytes(a.file) ? b : a))
+  const equal = candidates.filter((c) => c.kg <= segmorph.kg).map((c) => ({ ...c, ...deliveredBytes(c.file) }));
+  const anchor = equal.length ? equal.reduce((a, b) => (b.brotli < a.brotli ? b : a))
                               : candidates.reduce((a, b) => (b.kg < a.kg ? b : a));
   return { segmorph, gltfpack: { ...anchor, kg_higher: equal.length === 0, ...deliveredBytes(anchor.file) } };
 }

@@ -385,7 +385,8 @@ function browserPart(browser, lines, flags) {
   print('## In the browser');
   print();
   print(`Each sequence encoded by segmorph \`--error ${SPEED_ERROR}\` and by gltfpack 1.3 \`-cc -af 0\` swept over \`-vp\`, the ` +
-        'smallest gltfpack file at equal or lower KG (measured by `segmorph verify` after meshopt_decode.mjs) as the anchor. ' +
+        'gltfpack file smallest after brotli -q 11 at equal or lower KG (measured by `segmorph verify` after ' +
+        'meshopt_decode.mjs) as the anchor. ' +
         'Bytes as a web server sends them (brotli -q 11, gzip -9, raw). **Load**: the time GLTFLoader takes from the ' +
         'bytes in memory to a scene ready to play, in one page of headless Chromium ' +
         `(${browser.chromium ?? 'Chromium'}, software rendering, no GPU): segmorph's file with \`GLTFSegmorphExtension\` ` +

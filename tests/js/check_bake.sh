@@ -10,7 +10,8 @@
 #           dropped), then meshopt_decode.mjs, whose output the validator must pass; verify must pair every
 #           animated primitive and measure KG below 0.5 %. The samples measure 0.22 % at most (the chicken, as
 #           ../shared/samples/README.md says); a misread dequantization or a wrong pairing measures tens of
-#           percent and more.
+#           percent and more. Then -cz (KHR_meshopt_compression) at the same -vp, undone by meshopt_decode.mjs:
+#           both meshopt codecs are lossless on the same quantized data, so verify must measure the same KG.
 set -u
 mode=$1 segmorph=$2 work=$3 samples=$4 shared=${5:-}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -76,6 +77,15 @@ for input in $files; do
           awk -v kg="$kg" 'BEGIN { exit !(kg > 1) }' || { echo "FAIL $input: KG $kg % misses gltfpack's clamped weights"; failures=$((failures + 1)); }
         else
           awk -v kg="$kg" 'BEGIN { exit !(kg < 0.5) }' || { echo "FAIL $input: KG $kg % is not below 0.5"; failures=$((failures + 1)); }
+        fi
+        packed_cz="$work/$index-$name.gltfpack-cz.glb" plain_cz="$work/$index-$name.gltfpack-cz-decoded.glb"
+        if node "$here/node_modules/gltfpack/cli.js" -i "$input" -o "$packed_cz" -cz -af 0 -vp 14 >/dev/null &&
+           grep -q KHR_meshopt_compression "$packed_cz" && node "$here/meshopt_decode.mjs" "$packed_cz" "$plain_cz" &&
+           report=$("$segmorph" verify -q "$input" "$plain_cz" --json); then
+          kg_cz=$(echo "$report" | sed 's/.*"kg_percent":\([^,}]*\).*/\1/')
+          [ "$kg_cz" = "$kg" ] || { echo "FAIL $input: gltfpack -cz measures KG $kg_cz %, -cc $kg %"; failures=$((failures + 1)); }
+        else
+          echo "FAIL gltfpack -cz/meshopt_decode/verify $input"; failures=$((failures + 1))
         fi
       else
         echo "FAIL gltfpack/meshopt_decode/validate/verify $input"; failures=$((failures + 1))
