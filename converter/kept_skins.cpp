@@ -89,15 +89,16 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
     for (size_t c = 0; c < subsample[n].primitives[0].clips.size(); ++c)
       whole = whole && subsample[n].primitives[0].clips[c].frame_count ==
                            file.sampled[n].primitives[0].clips[c].frame_count;
-  // The encodes differ in their tracks only: their meshes are decoded from Draco once, and their vertices pair as
-  // the first's.
-  tinygltf::Model meshes = model, candidate;
-  SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(meshes, codec.threads));
+  // The encodes differ in their tracks only: the rest (Draco meshes, animation streams) is decoded once, each
+  // candidate's tracks are coded on a copy of that, and their vertices pair as the first's.
+  tinygltf::Model decoded = model, candidate;
+  SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(decoded, codec.threads));
+  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(decoded));
   double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
   int measurements = 0;
   VertexMatches matches;
   auto within_goal = [&](double distance, bool every_frame, bool& ok) {
-    candidate = meshes;
+    candidate = decoded;
     SEGMORPH_RETURN_IF_ERROR(encode(distance, candidate));
     SEGMORPH_RETURN_IF_ERROR(
         measured_kg(file, every_frame ? file.sampled : subsample, std::move(candidate), matches, codec.threads, kg));
