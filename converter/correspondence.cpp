@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 #include "parallel.h"
@@ -29,6 +30,9 @@ std::vector<double> mean_positions(const std::vector<FrameSequence>& clips) {
 std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference,
                                      const std::vector<FrameSequence>& other, size_t threads, size_t held_bytes) {
   assert(!reference.empty() && reference.size() == other.size() && other[0].vertex_count > 0);
+  for (size_t c = 0; c < reference.size(); ++c)
+    assert(reference[c].frame_count == other[c].frame_count && reference[c].vertex_count == reference[0].vertex_count &&
+           other[c].vertex_count == other[0].vertex_count);
   const size_t count = reference[0].vertex_count, other_count = other[0].vertex_count;
   std::vector<uint32_t> match(count);
   const float* first = reference[0].frame(0);
@@ -57,8 +61,8 @@ std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference
   double cell = diagonal > 0 ? diagonal / std::max(1.0, std::cbrt(double(other_count))) : 1.0;
   // Clamped so that far outliers cannot overflow; clamping only brings a point nearer the grid's box.
   auto index = [&](double x) { return int64_t(std::clamp(std::floor(x / cell), -1e15, 1e15)); };
-  auto key = [](int64_t x, int64_t y, int64_t z) {
-    return uint64_t(x * 73856093) ^ uint64_t(y * 19349663) ^ uint64_t(z * 83492791);
+  auto key = [](int64_t x, int64_t y, int64_t z) {  // in unsigned arithmetic, which wraps
+    return (uint64_t(x) * 73856093u) ^ (uint64_t(y) * 19349663u) ^ (uint64_t(z) * 83492791u);
   };
   std::vector<std::pair<uint64_t, uint32_t>> cells(other_count);
   auto place = [&] {
@@ -128,7 +132,12 @@ std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference
     }
     return sum;
   };
-  // The bounds are loosened by a relative 1e-9 so that rounding cannot skip a candidate that ties or wins.
+  // The bounds are loosened so that rounding cannot skip a candidate that ties or wins: the means' by a few units in
+  // the last place of the largest coordinate, the distances by a relative 1e-9.
+  double largest = 0;
+  for (double value : means) largest = std::max(largest, std::fabs(value));
+  for (double value : other_means) largest = std::max(largest, std::fabs(value));
+  const double tolerance = 8 * std::numeric_limits<double>::epsilon() * largest;
   constexpr double kSlack = 1 + 1e-9;
   const auto match_range = [&](size_t begin, size_t end) {
     std::vector<float> track(frames * 3);  // v's trajectory
@@ -150,7 +159,7 @@ std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference
       auto consider = [&](uint32_t i) {  // the other's vertex cells[i]
         const double* n = &cell_means[size_t(i) * 3];
         double apart = 0;
-        for (int k = 0; k < 3; ++k) apart += (m[k] - n[k]) * (m[k] - n[k]);
+        for (int k = 0; k < 3; ++k) apart += std::pow(std::max(0.0, std::fabs(m[k] - n[k]) - tolerance), 2);
         if (double(frames) * apart > best * kSlack) return;
         const uint32_t u = cells[i].second;
         const double d = trajectory_distance(track.data(), u, best);
@@ -161,27 +170,29 @@ std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference
         if (found != grid.end())
           for (uint32_t i = found->second.first; i < found->second.second; ++i) consider(i);
       };
-      // How many cells within `radius` of the centre lie inside the box (in double: a far outlier's box is vast).
-      auto box_cells = [&](int64_t radius) {
-        double product = 1;
-        for (int k = 0; k < 3; ++k)
-          product *= double(std::max<int64_t>(0, std::min(radius, high[k] - centre[k]) -
-                                                     std::max(-radius, low[k] - centre[k]) + 1));
-        return product;
-      };
       // Far from any good match (files that do not correspond), shells of empty cells could outnumber the other's
-      // vertices many times over: once they would, every vertex is considered instead.
-      double visited = 0;
+      // vertices many times over (a flat or thin shape's box is mostly empty): once the cells a shell would cost
+      // bring the search's to a quarter of the other's vertex count, every vertex is considered instead (a vertex
+      // costs a few operations, a cell a table look-up).
+      double cost = 0;
       for (int64_t radius = near_shell; radius <= far_shell; ++radius) {
-        if (std::isfinite(best) && (double(radius) - 1) * cell > std::sqrt(best / double(frames)) * kSlack) break;
-        const double shell = box_cells(radius) - (radius > 0 ? box_cells(radius - 1) : 0);
-        if (visited + shell > 2 * double(other_count)) {
+        if (std::isfinite(best) &&
+            (double(radius) - 1) * cell - tolerance > std::sqrt(best / double(frames)) * kSlack)
+          break;
+        for (int k = 0; k < 3; ++k)
+          from[k] = std::max(-radius, low[k] - centre[k]), to[k] = std::min(radius, high[k] - centre[k]);
+        // The rows (dx, dy) walked and the cells looked up: all of a row on the shell's sides, its two ends (where
+        // inside the box) in the rows within. In double: a far outlier's box is vast.
+        auto within = [&](int k) {
+          return double(std::max<int64_t>(0, std::min(to[k], radius - 1) - std::max(from[k], 1 - radius) + 1));
+        };
+        const double rows = double(to[0] - from[0] + 1) * double(to[1] - from[1] + 1), inner = within(0) * within(1);
+        const double ends = double(from[2] == -radius) + double(to[2] == radius && radius > 0);
+        cost += rows + (rows - inner) * double(to[2] - from[2] + 1) + inner * ends;
+        if (cost > double(other_count) / 4) {
           for (uint32_t i = 0; i < other_count; ++i) consider(i);
           break;
         }
-        visited += shell;
-        for (int k = 0; k < 3; ++k)
-          from[k] = std::max(-radius, low[k] - centre[k]), to[k] = std::min(radius, high[k] - centre[k]);
         for (int64_t dx = from[0]; dx <= to[0]; ++dx)
           for (int64_t dy = from[1]; dy <= to[1]; ++dy) {
             if (std::abs(dx) == radius || std::abs(dy) == radius) {

@@ -24,6 +24,9 @@ constexpr int kBracketRounds = 8, kHalvings = 4;
 // the cost of sampling and comparing them all. The distance it settles on is then measured on every frame.
 constexpr size_t kSearchFrames = 24;
 
+// The most bytes of buffers the search holds decoded whole beside each measurement's copy.
+constexpr size_t kHeldDecodeBytes = size_t(256) << 20;
+
 // `sampled` with every k-th frame of each clip, k such that a clip keeps at most kSearchFrames.
 std::vector<SampledNode> thinned(const std::vector<SampledNode>& sampled) {
   std::vector<SampledNode> out;
@@ -89,11 +92,18 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
     for (size_t c = 0; c < subsample[n].primitives[0].clips.size(); ++c)
       whole = whole && subsample[n].primitives[0].clips[c].frame_count ==
                            file.sampled[n].primitives[0].clips[c].frame_count;
-  // The encodes differ in their tracks only: the rest (Draco meshes, animation streams) is decoded once, each
-  // candidate's tracks are coded on a copy of that, and their vertices pair as the first's.
+  // The encodes differ in their tracks only: the rest is decoded once (the Draco meshes; the animation streams too
+  // where their baked frames stay within kHeldDecodeBytes, since each measurement copies it), each candidate's
+  // tracks are coded on a copy of that, and their vertices pair as the first's.
   tinygltf::Model decoded = model, candidate;
   SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(decoded, codec.threads));
-  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(decoded));
+  {
+    tinygltf::Model streams = decoded;
+    SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(streams));
+    size_t bytes = 0;
+    for (const tinygltf::Buffer& buffer : streams.buffers) bytes += buffer.data.size();
+    if (bytes <= kHeldDecodeBytes) decoded = std::move(streams);
+  }
   double kg = 0, within = 0, beyond = 0;  // distances known within and beyond the goal (0: none yet)
   int measurements = 0;
   VertexMatches matches;

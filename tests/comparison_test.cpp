@@ -91,7 +91,9 @@ TEST(MatchVertices, AgreesWithBruteForceWhateverTheThreadsAndHeldFrames) {
   std::vector<uint32_t> order(rest);
   for (uint32_t u = 0; u < rest; ++u) order[u] = u;
   std::shuffle(order.begin(), order.end(), random);
-  order.push_back(order[5]);  // other vertex 600 duplicates other vertex 5
+  size_t tied = 0;  // the first other vertex not moved far; other vertex 600 duplicates it
+  while (order[tied] % 97 == 0) ++tied;
+  order.push_back(order[tied]);
   for (size_t frames : {9, 4}) {
     std::vector<float> positions, moved;
     for (size_t f = 0; f < frames; ++f) {
@@ -106,17 +108,37 @@ TEST(MatchVertices, AgreesWithBruteForceWhateverTheThreadsAndHeldFrames) {
         for (int k = 0; k < 3; ++k) moved.push_back(p[k] + (far ? 3.0f : 0.02f / 30 * unit(random)));
       }
       float* frame = &moved[f * order.size() * 3];
-      std::copy(frame + 5 * 3, frame + 6 * 3, frame + (order.size() - 1) * 3);
+      std::copy(frame + tied * 3, frame + tied * 3 + 3, frame + (order.size() - 1) * 3);
     }
     reference.push_back(clip_of(count, positions));
     other.push_back(clip_of(order.size(), moved));
   }
   const std::vector<uint32_t> expected = nearest_trajectories(reference, other);
-  EXPECT_EQ(expected[order[5]], 5u);  // the tie goes to the lower
+  EXPECT_EQ(expected[order[tied]], tied);  // the tie goes to the lower
   EXPECT_EQ(match_vertices(reference, other), expected);
   EXPECT_EQ(match_vertices(reference, other, 2), expected);
   EXPECT_EQ(match_vertices(reference, other, 1, 1), expected);  // one frame held, the rest read in place
   EXPECT_EQ(match_vertices(reference, other, 3, 5 * order.size() * 12), expected);
+}
+
+TEST(MatchVertices, OfTwoEquallyNearTrajectoriesTheLowerVertexWins) {
+  // The other: a 10 x 10 x 3 lattice, shuffled, moving by exact steps; the reference: 60 points half a spacing along x
+  // from lattice points, so each is exactly as near two of them (every value is exact in binary). Whichever of the two
+  // the search meets first, the lower index wins.
+  std::mt19937 random(11);
+  std::vector<uint32_t> order(300);
+  for (uint32_t u = 0; u < 300; ++u) order[u] = u;
+  std::shuffle(order.begin(), order.end(), random);
+  std::vector<float> lattice, probes;
+  for (int f = 0; f < 3; ++f) {
+    const float dx = 0.25f * float(f), dz = -0.5f * float(f);
+    for (uint32_t u : order)
+      lattice.insert(lattice.end(), {float(u % 10) + dx, float(u / 10 % 10), float(u / 100) + dz});
+    for (int p = 0; p < 60; ++p)
+      probes.insert(probes.end(), {float(p % 9) + 0.5f + dx, float(p / 9 % 10), float(p % 3) + dz});
+  }
+  const std::vector<FrameSequence> reference = {clip_of(60, probes)}, other = {clip_of(300, lattice)};
+  EXPECT_EQ(match_vertices(reference, other), nearest_trajectories(reference, other));
 }
 
 TEST(MatchVertices, AVertexFarFromEveryOtherStillFindsTheNearest) {

@@ -83,7 +83,8 @@ for input in $files; do
            grep -q KHR_meshopt_compression "$packed_cz" && node "$here/meshopt_decode.mjs" "$packed_cz" "$plain_cz" &&
            report=$("$segmorph" verify -q "$input" "$plain_cz" --json); then
           kg_cz=$(echo "$report" | sed 's/.*"kg_percent":\([^,}]*\).*/\1/')
-          [ "$kg_cz" = "$kg" ] || { echo "FAIL $input: gltfpack -cz measures KG $kg_cz %, -cc $kg %"; failures=$((failures + 1)); }
+          [ "$kg_cz" = "$kg" ] ||
+            { echo "FAIL $input: gltfpack -cz measures KG $kg_cz %, -cc $kg %"; failures=$((failures + 1)); }
         else
           echo "FAIL gltfpack -cz/meshopt_decode/verify $input"; failures=$((failures + 1))
         fi
