@@ -14,9 +14,9 @@ namespace segmorph {
 // sum of squared distances over every frame of every clip. That is the pairing under which the other's
 // error is smallest, so quantization that moves vertices past their neighbours cannot mislead it (a nearest
 // first frame would); of equally near vertices, the lowest. Before any search: identity when the two have the same
-// vertex count and first frame (whatever duplicates the reference holds). The vertices are matched on up to `threads` threads (0: every hardware thread), with the same result
-// for any number. The search holds a vertex-major copy of the other's first frames, at most `held_bytes` (and at
-// least one frame).
+// vertex count and first frame (whatever duplicates the reference holds). The vertices are matched on up to
+// `threads` threads (0: every hardware thread), with the same result for any number. The search holds a
+// vertex-major copy of the other's first frames, at most `held_bytes` (and at least one frame).
 std::vector<uint32_t> match_vertices(const std::vector<FrameSequence>& reference,
                                      const std::vector<FrameSequence>& other, size_t threads = 1,
                                      size_t held_bytes = size_t(64) << 20);

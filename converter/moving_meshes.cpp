@@ -141,7 +141,7 @@ int component_type_of(const BaseMeshAttribute& attribute) {
   }
 }
 
-// One primitive's Draco coding: what compress_primitive computes from the read mesh, before writing it to the model.
+// One primitive's Draco coding: the mesh read (its copies merged), and what Draco makes of it, until written.
 struct CodedPrimitive {
   tinygltf::Primitive* primitive = nullptr;
   std::string what;

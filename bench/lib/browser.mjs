@@ -1,17 +1,17 @@
 // The browser part: what a web page pays for a sequence, segmorph's file against gltfpack's at the same error.
 // For each sequence: segmorph encode --error SPEED_ERROR; gltfpack -cc -af 0 swept over -vp, the file smallest after
 // brotli -q 11 at equal or lower KG (measured by segmorph verify after meshopt_decode.mjs) as the anchor; both files'
-// bytes raw, after gzip -9 and after brotli -q 11; then, in headless Chromium (Debian's, driven by playwright-core, pages served by
-// web/serve.mjs on 127.0.0.1), the time GLTFLoader takes from the bytes to a scene ready to play (segmorph: the
-// plugin and DRACOLoader; gltfpack: MeshoptDecoder), the first load in the page and the median of the next ones, and
-// the decoder's own share. Time to the first played frame over a link: brotli bytes / link rate + that time.
+// bytes raw, after gzip -9 and after brotli -q 11; then, in headless Chromium (Debian's, driven by playwright-core,
+// pages served by web/serve.mjs on 127.0.0.1), the time GLTFLoader takes from the bytes to a scene ready to play
+// (segmorph: the plugin and DRACOLoader; gltfpack: MeshoptDecoder), the first load in the page and the median of the
+// next ones, and the decoder's own share. Time to the first played frame over a link: brotli bytes / link rate + that time.
 
 import { mkdirSync } from 'node:fs';
 import path from 'node:path';
 import { chromium } from '../../tests/js/node_modules/playwright-core/index.mjs';
 import { serve } from '../../web/serve.mjs';
 import { SPEED_ERROR } from './speed.mjs';
-import { deliveredBytes, fileBytes, progress } from './tools.mjs';
+import { deliveredBytes, progress } from './tools.mjs';
 
 export const LINKS_MBIT = [10, 50];
 const GLTFPACK_BITS = { full: [9, 10, 11, 12, 13, 14, 15, 16], quick: [12] };
@@ -36,10 +36,11 @@ function files(tools, input, dir, quick) {
     if (measured) candidates.push({ file: local(`${name}.glb`), setting: `-cc -af 0 -vp ${bits}`, kg: measured.kg_percent });
   }
   if (candidates.length === 0) return { failed: `gltfpack failed at every -vp (${dir})` };
-  const equal = candidates.filter((c) => c.kg <= segmorph.kg).map((c) => ({ ...c, ...deliveredBytes(c.file) }));
+  const delivered = (c) => ({ ...c, ...deliveredBytes(c.file) });
+  const equal = candidates.filter((c) => c.kg <= segmorph.kg).map(delivered);
   const anchor = equal.length ? equal.reduce((a, b) => (b.brotli < a.brotli ? b : a))
-                              : candidates.reduce((a, b) => (b.kg < a.kg ? b : a));
-  return { segmorph, gltfpack: { ...anchor, kg_higher: equal.length === 0, ...deliveredBytes(anchor.file) } };
+                              : delivered(candidates.reduce((a, b) => (b.kg < a.kg ? b : a)));
+  return { segmorph, gltfpack: { ...anchor, kg_higher: equal.length === 0 } };
 }
 
 // Every input's files, then their load times in one Chromium page. { inputs: [{ label, segmorph, gltfpack }] }.
