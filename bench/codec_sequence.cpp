@@ -2,7 +2,8 @@
 // primitive is encoded against a stand-in base mesh (the first frame quantized to 14 bits over its bounding
 // box, as Draco's default position quantization would), decoded, and checked.
 //   codec_sequence FILE [--error E | --bpvf R | --lossless] [--clusters K] [--no-temporal] [--no-blend]
-//                       [--no-spatial] [--no-curvature-refinement] [--no-motion-refinement] [--fast-decode]
+//                       [--no-spatial] [--no-frame-references] [--no-curvature-refinement]
+//                       [--no-motion-refinement] [--fast-decode]
 // Prints one line: clusters, E(Π) before and after refinement, stream bytes (motion / residuals), bits per
 // vertex per frame of the stream alone, KG error and RMSE of the decoded frames, encoder and decoder
 // milliseconds, and whether the decoder reproduced the encoder's reconstruction exactly.
@@ -41,6 +42,8 @@ int main(int argc, char** argv) {
       settings.temporal_residuals = false;
     else if (arg == "--no-spatial")
       settings.spatial_residuals = false;
+    else if (arg == "--no-frame-references")
+      settings.frame_references = false;
     else if (arg == "--no-blend")
       settings.blend_weights = false;
     else if (arg == "--no-curvature-refinement")

@@ -29,6 +29,9 @@ struct CodecSettings {
   bool blend_weights = true;         // Eq. 3; off: each vertex follows its own cluster only
   bool temporal_residuals = true;    // beyond the paper: residuals predicted from the previous frame's
   bool spatial_residuals = true;     // beyond the paper: ... and from already decoded neighbours'
+  // Beyond the paper: a frame's motion and residuals predicted from an earlier frame than the previous one where it
+  // predicts much better (stream version 3; frame_references.h). With temporal residuals only.
+  bool frame_references = true;
   // Beyond the paper: the residuals in the table code of stream version 2 (table_residual_coding.h), which decodes
   // faster and costs more bytes than the adaptive code. Lossy modes only.
   bool table_residuals = false;

@@ -70,9 +70,9 @@ Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two
     return [to](size_t i, float x) { to[i] = x; };
   };
   if (two)
-    reconstructor_.two_frames(&predictions_[0], symbol(0), output(0), &predictions_[row_], symbol(1), output(1));
+    reconstructor_.two_frames(frame, &predictions_[0], symbol(0), output(0), &predictions_[row_], symbol(1), output(1));
   else
-    reconstructor_.frame(&predictions_[0], symbol(0), output(0));
+    reconstructor_.frame(frame, &predictions_[0], symbol(0), output(0));
   for (size_t s = 0; s < count; ++s)
     if (!finite(s)) return not_finite();
   return Status::Ok();

@@ -76,7 +76,8 @@ void quantize_lanes(size_t count, double weight, const double* __restrict p, con
 void measure_lanes(const StreamContent& content, const ResidualTraversal& traversal,
                    const FramePredictions& predictions, const std::vector<float>& targets,
                    const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                   SubbandCurve (&curves)[3], const std::function<void(double)>& progress) {
+                   SubbandCurve (&curves)[3], const std::function<void(double)>& progress,
+                   std::vector<std::vector<double>>& spare) {
   const size_t welded = multiplicity.size();
   const bool temporal = content.flags & format::kFlagTemporalResiduals;
   const bool spatial = content.flags & format::kFlagSpatialResiduals;
@@ -91,15 +92,26 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
   const size_t count = q.size();
   if (count == 0) return;
   std::vector<double> distortion(count, 0.0), sum(count), r(count), zeros(count, 0.0), p(count), target(count);
-  std::vector<double> previous(welded * count), current(welded * count), change(welded * count, 0.0);
+  std::vector<double> change(welded * count, 0.0);
   std::vector<int32_t> previous_symbol(welded * count), current_symbol(welded * count);
   std::vector<EntropyCounter> entropy(count);
   std::vector<double> predicted(welded * 3);  // in welded order
   std::vector<double> frame_prediction(welded * 3), frame_target(welded * 3), frame_weight(welded);
   for (size_t v = 0; v < welded; ++v) frame_weight[traversal.position[v]] = multiplicity[v];
+  // Each frame's lanes' residuals are held while a later frame may use them as its reference: the next frame of the
+  // clip, or a later one that references it from further back (until the last). Frames without a reference read
+  // zeros. The buffers are reused.
+  const size_t frame_count = content.frame_count();
+  std::vector<size_t> last_use(frame_count, 0);
+  for (size_t c = 0, first = 0; c < content.clip_frames.size(); first += content.clip_frames[c++])
+    for (size_t f = 0; f < content.clip_frames[c]; ++f) {
+      const size_t back = frame_reference(content, first + f, f);
+      if (back > 0) last_use[first + f - back] = std::max(last_use[first + f - back], first + f);
+    }
+  std::vector<std::pair<size_t, std::vector<double>>> held;  // (frame, its lanes' residuals)
+  const std::vector<double> none(welded * count, 0.0);
   size_t frame = 0;
   for (uint32_t frames : content.clip_frames) {
-    std::fill(previous.begin(), previous.end(), 0.0);
     std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
     for (uint32_t f = 0; f < frames; ++f, ++frame) {
       // This frame's predictions and targets, by position in the traversal.
@@ -109,6 +121,14 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
           frame_prediction[traversal.position[v] * 3 + axis] = predicted[v * 3 + axis];
           frame_target[traversal.position[v] * 3 + axis] = double(targets[(frame * welded + v) * 3 + axis]);
         }
+      // The reference's residuals (the temporal prediction), and this frame's.
+      const size_t back = frame_reference(content, frame, f);
+      const double* reference = none.data();
+      for (const auto& entry : held)
+        if (back > 0 && entry.first == frame - back) reference = entry.second.data();
+      std::vector<double> current;
+      if (!spare.empty()) current = std::move(spare.back()), spare.pop_back();
+      current.resize(welded * count);
       for (size_t position = 0; position < welded; ++position) {
         const uint32_t begin = traversal.earlier_offset[position], end = traversal.earlier_offset[position + 1];
         const size_t at = position * count;
@@ -116,7 +136,7 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
           p[s] = frame_prediction[position * 3 + lane_axis[s]];
           target[s] = frame_target[position * 3 + lane_axis[s]];
         }
-        const double* last = temporal ? &previous[at] : zeros.data();  // the temporal prediction
+        const double* last = temporal ? &reference[at] : zeros.data();
         for (size_t s = 0; s < count; ++s) r[s] = last[s];
         if (spatial && end > begin) {
           std::fill(sum.begin(), sum.end(), 0.0);
@@ -134,11 +154,23 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
           entropy[s].add(std::min(magnitude, 2), current_symbol[at + s]);
         }
       }
-      previous.swap(current);
+      // Let go of the frames nothing after this one uses; hold this one if something does.
+      for (size_t i = 0; i < held.size();)
+        if (last_use[held[i].first] <= frame) {
+          spare.push_back(std::move(held[i].second));
+          held.erase(held.begin() + std::ptrdiff_t(i));
+        } else {
+          ++i;
+        }
+      if (last_use[frame] > frame)
+        held.emplace_back(frame, std::move(current));
+      else
+        spare.push_back(std::move(current));
       previous_symbol.swap(current_symbol);
-      if (progress) progress(double(frame + 1) / double(content.frame_count()));
+      if (progress) progress(double(frame + 1) / double(frame_count));
     }
   }
+  for (auto& entry : held) spare.push_back(std::move(entry.second));
   for (size_t s = 0; s < count; ++s) {
     SubbandCurve& curve = curves[lane_axis[s]];
     curve.step.push_back(q[s]);
@@ -154,7 +186,8 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
 void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
                       const FramePredictions& predictions, const std::vector<float>& targets,
                       const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                      SubbandCurve (&curves)[3], size_t threads, const std::function<void(double)>& progress) {
+                      SubbandCurve (&curves)[3], size_t threads, const std::function<void(double)>& progress,
+                      MeasureBuffers* buffers) {
   const size_t lanes = steps[0].size() + steps[1].size() + steps[2].size();
   // Each range predicts and walks every frame: at least two lanes a thread make that worth it.
   const size_t ranges = std::min(thread_count(threads), std::max<size_t>(lanes / 2, 1));
@@ -162,6 +195,9 @@ void measure_subbands(const StreamContent& content, const ResidualTraversal& tra
     SubbandCurve axis[3];
   };
   std::vector<Curves> measured(ranges);
+  MeasureBuffers local;
+  MeasureBuffers& reused = buffers ? *buffers : local;
+  if (reused.spare.size() < ranges) reused.spare.resize(ranges);
   std::vector<size_t> range_begin(ranges + 1);
   for (size_t r = 0; r <= ranges; ++r) range_begin[r] = lanes * r / ranges;
   parallel_ranges(ranges, ranges, [&](size_t begin, size_t end) {
@@ -176,7 +212,7 @@ void measure_subbands(const StreamContent& content, const ResidualTraversal& tra
         }
       // The first range runs on the calling thread: it reports.
       measure_lanes(content, traversal, predictions, targets, multiplicity, subset, measured[r].axis,
-                    r == 0 ? progress : std::function<void(double)>());
+                    r == 0 ? progress : std::function<void(double)>(), reused.spare[r]);
     }
   });
   for (size_t r = 0; r < ranges; ++r)

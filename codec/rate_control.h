@@ -38,16 +38,24 @@ class FramePredictions {
   const FramePredictor predictor_;
 };
 
+// Memory measure_subbands keeps from one call to the next: the buffers of the frames it holds for later frames'
+// references, which a stream with version 3's references holds many of (each W × lanes doubles), and which would
+// otherwise be allocated and faulted in again at every call. One per caller; calls must not overlap.
+struct MeasureBuffers {
+  std::vector<std::vector<std::vector<double>>> spare;  // per range of lanes, buffers not in use
+};
+
 // Closed-loop D(q) and R(q) of the three subbands at more candidate steps (steps[axis], any number each; the
 // measurements are appended to curves[axis]): the decoder's residual loop (reconstruction.h) with the content's
 // flags and clips. targets: F × W × 3; multiplicity: W (original vertices per welded vertex). The steps are measured
 // on up to `threads` threads (0: every hardware thread), with the same results for any number. `progress`, if any,
-// is called on the calling thread with the fraction of the frames walked, after each frame.
+// is called on the calling thread with the fraction of the frames walked, after each frame. `buffers`, if any, is
+// reused.
 void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
                       const FramePredictions& predictions, const std::vector<float>& targets,
                       const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
                       SubbandCurve (&curves)[3], size_t threads = 1,
-                      const std::function<void(double fraction)>& progress = {});
+                      const std::function<void(double fraction)>& progress = {}, MeasureBuffers* buffers = nullptr);
 
 struct StepChoice {
   size_t index[3] = {0, 0, 0};  // into each curve

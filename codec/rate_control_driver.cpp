@@ -6,6 +6,8 @@
 #include <optional>
 #include <string>
 
+#include "frame_references.h"
+#include "stream_format.h"
 #include "motion_quantization.h"
 #include "rate_control.h"
 #include "rate_target.h"
@@ -14,6 +16,10 @@
 
 namespace segmorph {
 namespace {
+
+// Frame references (stream version 3) are kept only when they promise at least 1 % fewer bytes (or, with a rate
+// target, 1 % less distortion): the promise is measured at fewer steps without them than with them.
+constexpr double kReferenceMinGain = 0.99;
 
 // Other motion step ratios tried with an error target (which one wins depends on the sequence: docs/codec.md).
 constexpr double kMotionStepRatioTrials[] = {0.25, 1.0};
@@ -40,6 +46,11 @@ class RateControlDriver {
   template <typename Choose>
   void refine_steps(StepChoice& choice, Choose choose);
   void prepare_motion(double motion_step);
+  void choose_references();
+  void drop_references();
+  double estimated_cost();
+  bool keep_references();
+  bool references_rejected();
   size_t side_bytes();
   StepChoice choose();
   void residual_rate_control(bool fresh);
@@ -62,6 +73,9 @@ class RateControlDriver {
   SubbandCurve curves_[3];
   double residual_budget_ = 0;
   StreamSizes sizes_;
+  bool references_chosen_ = false, references_checked_ = false;
+  uint8_t flags_without_references_ = 0;
+  MeasureBuffers buffers_;
 };
 
 // Measures more candidate steps of the subbands (those not measured yet; candidates[axis]) and adds them to their
@@ -80,7 +94,7 @@ void RateControlDriver::extend(const std::vector<double> (&candidates)[3]) {
       "rate control: measuring " + std::to_string(steps[0].size() + steps[1].size() + steps[2].size()) + " steps";
   report_progress(settings_, stage, 0);
   measure_subbands(content_, p_.traversal, *predictions_, p_.trajectories.positions, p_.multiplicity, steps, curves_,
-                   settings_.threads, [&](double fraction) { report_progress(settings_, stage, fraction); });
+                   settings_.threads, [&](double fraction) { report_progress(settings_, stage, fraction); }, &buffers_);
 }
 
 // Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1, ±2), after widening the
@@ -119,10 +133,76 @@ void RateControlDriver::prepare_motion(double motion_step) {
   quantize_motion_and_weights(fitted_, lossless ? 1e-6 : motion_step / radius_, lossless ? 1e-6 * radius_ : motion_step,
                               p_.base_welded, p_.trajectories, clusters_, p_.adjacency, settings_.blend_weights,
                               content_);
+  if (!references_chosen_) choose_references();
   report_.ms_motion += milliseconds_since(begin);
   begin = EncodeClock::now();
   predictions_.emplace(content_, p_.base_welded);
   report_.ms_prediction += milliseconds_since(begin);
+}
+
+// Each frame's reference, once, on the first quantized motion (the motion step trials change it little): version 3's
+// references when some frame gains by one (choose_frame_references's estimate, checked by keep_references() or, for
+// lossless streams, by encode()), else the stream stays version 1 or 2.
+void RateControlDriver::choose_references() {
+  references_chosen_ = true;
+  flags_without_references_ = content_.flags;
+  if (!settings_.frame_references || !settings_.temporal_residuals) return;
+  report_progress(settings_, "rate control: choosing each frame's reference");
+  FrameReferences chosen = choose_frame_references(content_, p_.traversal, p_.base_welded, p_.trajectories.positions,
+                                                   largest_reference_window(p_.welded), mean_step_);
+  if (!chosen.needed) return;
+  content_.flags |= format::kFlagFrameReferences | format::kFlagTemporalResiduals;
+  content_.reference_window = chosen.window;
+  content_.references = std::move(chosen.references);
+}
+
+void RateControlDriver::drop_references() {
+  content_.flags = flags_without_references_;
+  content_.reference_window = 0;
+  content_.references.clear();
+}
+
+// What the current curves promise: with an error target the stream's estimated bytes, with a rate target the
+// distortion within its budget (smaller is better).
+double RateControlDriver::estimated_cost() {
+  if (settings_.mode == RateMode::bpvf)
+    residual_budget_ = std::max(0.0, settings_.target * double(p_.vertex_count) * double(p_.frames_total) -
+                                         8.0 * double(side_bytes() + settings_.outside_bytes));
+  const StepChoice choice = choose();
+  return settings_.mode == RateMode::error ? double(side_bytes()) + choice.bits / 8 : choice.distortion;
+}
+
+// Whether the references stay: they do if, at the steps chosen with them, they promise a stream at least
+// kReferenceMinGain smaller than without them (measured at the steps around that choice). An earlier frame that
+// predicts a frame better breaks the chain of previous frames, which the motion's deltas and the residual code's
+// contexts follow, and on short or small sequences that can cost more than it saves. Returns with the references
+// dropped when they go.
+bool RateControlDriver::keep_references() {
+  const auto begin = EncodeClock::now();
+  const double with = estimated_cost();
+  const uint8_t kept_flags = content_.flags;
+  const uint32_t kept_window = content_.reference_window;
+  std::vector<uint32_t> kept_references = content_.references;
+  const SubbandCurve with_curves[3] = {curves_[0], curves_[1], curves_[2]};
+  const StepChoice with_choice = choice_;
+  const double with_budget = residual_budget_;
+  drop_references();
+  std::vector<double> near[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    const double chosen = with_curves[axis].step[with_choice.index[axis]];
+    for (int j = -1; j <= 1; ++j) near[axis].push_back(chosen * std::exp2(j / 4.0));
+    curves_[axis] = SubbandCurve();
+  }
+  extend(near);
+  const double without = estimated_cost();
+  report_.ms_rate_control += milliseconds_since(begin);
+  if (!(with <= kReferenceMinGain * without)) return false;
+  content_.flags = kept_flags, content_.reference_window = kept_window;
+  content_.references = std::move(kept_references);
+  for (int axis = 0; axis < 3; ++axis) curves_[axis] = with_curves[axis];
+  choice_ = with_choice, residual_budget_ = with_budget;
+  set_residual_steps();
+  return true;
 }
 
 // Bytes of the stream without residuals (header, welding, labels, motion, weights).
@@ -167,6 +247,7 @@ void RateControlDriver::choose_motion_step_ratio() {
   const double guess = mean_step_;
   prepare_motion(kMotionStepRatio * guess);
   residual_rate_control(true);
+  if (references_rejected()) return choose_motion_step_ratio();
   const StepChoice first = choice_;
   double best_ratio = kMotionStepRatio, best_bytes = double(side_bytes()) + choice_.bits / 8;
   SubbandCurve best_curves[3] = {curves_[0], curves_[1], curves_[2]};
@@ -200,6 +281,9 @@ void RateControlDriver::choose_motion_step_ratio() {
 // The motion steps trade side information against prediction quality. They are tied to the residual step: motion step
 // = β × mean residual step. With a rate target, two passes (the second with the first's residual steps) at
 // β = kMotionStepRatio; with an error target, choose_motion_step_ratio.
+// The steps, with the frame references choose_references() proposes (measured by keep_references() after the first
+// rate control, and when they do not pay, the steps chosen again without them, as if they had never been proposed;
+// lossless streams: encode() decides).
 void RateControlDriver::choose_steps() {
   mean_step_ = p_.mean_step;
   if (settings_.mode == RateMode::lossless) {
@@ -208,11 +292,19 @@ void RateControlDriver::choose_steps() {
     for (int pass = 0; pass < 2; ++pass) {
       prepare_motion(kMotionStepRatio * mean_step_);
       residual_rate_control(true);
+      if (references_rejected()) return choose_steps();
       mean_step_ = (content_.residual_step[0] + content_.residual_step[1] + content_.residual_step[2]) / 3.0;
     }
   } else {
     choose_motion_step_ratio();
   }
+}
+
+// After the first rate control with proposed references: whether they were measured not to pay (and dropped).
+bool RateControlDriver::references_rejected() {
+  if (!(content_.flags & format::kFlagFrameReferences) || references_checked_) return false;
+  references_checked_ = true;
+  return !keep_references();
 }
 
 // Residual symbols by the decoder's own loop, then the stream; `restored` receives the reconstruction, each frame
@@ -242,7 +334,7 @@ void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vect
       const size_t offset = frame * row;
       predictions_->predict(frame, predicted.data());
       reconstructor.frame(
-          predicted.data(),
+          frame, predicted.data(),
           [&](size_t i, double p, double r) -> int64_t {
             const float x = targets[offset + i];
             if (lossless) return wide[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
@@ -262,6 +354,15 @@ void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vect
 void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored) {
   const auto start = EncodeClock::now();
   encode_residuals(stream, restored);
+  if (settings_.mode == RateMode::lossless && (content_.flags & format::kFlagFrameReferences)) {
+    // A lossless stream has no rate control to estimate by: it is written with and without the references, and the
+    // smaller kept (both reconstruct the frames exactly).
+    std::vector<uint8_t> with = stream;
+    const StreamSizes with_sizes = sizes_;
+    drop_references();
+    encode_residuals(stream, restored);
+    if (with.size() < stream.size()) stream = std::move(with), sizes_ = with_sizes;
+  }
   if (settings_.mode == RateMode::bpvf) {
     // The rate estimate is an estimate: correct the residual budget by what the coder really produced until the
     // output lands within 3 % below the target.

@@ -1,6 +1,7 @@
 #include "reconstruction.h"
 
 #include <algorithm>
+#include <cassert>
 #include <queue>
 
 #include "stream_format.h"
@@ -112,15 +113,15 @@ std::vector<double> predicted_frames(const StreamContent& content, const std::ve
 }
 
 ResidualReconstructor::ResidualReconstructor(const StreamContent& content, const ResidualTraversal& traversal)
-    : traversal_(traversal),
+    : content_(content),
+      traversal_(traversal),
       lossless_(content.flags & format::kFlagLossless),
       temporal_(content.flags & format::kFlagTemporalResiduals),
       spatial_(content.flags & format::kFlagSpatialResiduals),
       steps_{double(content.residual_step[0]), double(content.residual_step[1]), double(content.residual_step[2])},
-      previous_(traversal.order.size() * 3, 0.0),
-      current_(traversal.order.size() * 3, 0.0),
+      history_(size_t(reference_window(content)) + 2),
+      zeros_(traversal.order.size() * 3, 0.0),
       change_(traversal.order.size() * 3, 0.0),
-      second_(traversal.order.size() * 3, 0.0),
       second_change_(traversal.order.size() * 3, 0.0),
       inverse_count_(traversal.order.size(), 0.0) {
   for (size_t position = 0; position < inverse_count_.size(); ++position) {
@@ -129,8 +130,19 @@ ResidualReconstructor::ResidualReconstructor(const StreamContent& content, const
   }
 }
 
-void ResidualReconstructor::start_clip() {
-  std::fill(previous_.begin(), previous_.end(), 0.0);
+void ResidualReconstructor::start_clip() { frame_in_clip_ = 0; }
+
+double* ResidualReconstructor::slot(size_t in_clip) {
+  // Sized as frames are reconstructed, not up front: a stream's window costs memory only for frames it really has.
+  std::vector<double>& frame = history_[in_clip % history_.size()];
+  if (frame.empty()) frame.resize(zeros_.size());
+  return frame.data();
+}
+
+const double* ResidualReconstructor::reference(size_t frame, size_t in_clip) {
+  const uint32_t back = frame_reference(content_, frame, in_clip);
+  assert(back <= in_clip && back <= history_.size() - 2);
+  return back == 0 ? zeros_.data() : history_[(in_clip - back) % history_.size()].data();
 }
 
 }  // namespace segmorph

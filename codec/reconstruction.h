@@ -46,33 +46,38 @@ inline int64_t quantizer_index(double residual_times_inverse_step) {
 }
 
 // The residual loop shared by encoder and decoder, one frame at a time. For each welded vertex in traversal
-// order and each axis, with p the prediction and r the predicted residual: the previous frame's reconstructed
-// residual of the same vertex and axis when temporal residuals are on (0.0 at a clip's first frame, and always
-// when they are off), plus, when spatial residuals are on and the vertex has n > 0 earlier neighbours, their
-// mean: (Σ_j c_j) × (1 / n), the sum in the order of `earlier`, c_j the neighbour's reconstructed residual in
-// this frame minus (temporal) its previous one:
+// order and each axis, with p the prediction and r the predicted residual: the reconstructed residual of the same
+// vertex and axis in the frame's reference when temporal residuals are on (frame_reference(): the previous frame of
+// the clip, or with version 3's frame references the frame d back; 0.0 when the frame has none, and always when
+// temporal residuals are off), plus, when spatial residuals are on and the vertex has n > 0 earlier neighbours,
+// their mean: (Σ_j c_j) × (1 / n), the sum in the order of `earlier`, c_j the neighbour's reconstructed residual in
+// this frame minus (temporal) its reference's:
 //   lossy:    x = float(p + (r + k · step[axis]))          and the new r is r + k · step[axis]
 //   lossless: x = from_ordered_bits(ordered_bits(float(p + r)) + k)   and the new r is x − p
 class ResidualReconstructor {
  public:
-  // content: its flags and residual steps; both arguments must outlive the reconstructor.
+  // content: its flags, residual steps and frame references; both arguments must outlive the reconstructor.
   ResidualReconstructor(const StreamContent& content, const ResidualTraversal& traversal);
 
-  // Starts a clip: the previous frame's residuals are 0.
+  // Starts a clip: no frame of it is reconstructed yet.
   void start_clip();
 
-  // Reconstructs the next frame of the clip. predictions: W × 3 (vertex v, axis a at v · 3 + a).
+  // Reconstructs the next frame of the clip, which is stream frame `frame` (its reference is the content's).
+  // predictions: W × 3 (vertex v, axis a at v · 3 + a).
   // `symbol(i, p, r)` returns k for coordinate i = v · 3 + a (the encoder computes it from its target, the
   // decoder reads it); `output(i, x)` receives the reconstructed coordinate.
   template <typename Symbol, typename Output>
-  void frame(const double* predictions, Symbol symbol, Output output);
+  void frame(size_t frame, const double* predictions, Symbol symbol, Output output);
 
-  // The next two frames of the clip: the same as frame(a…) then frame(b…), the symbols requested and the
-  // outputs given in another interleaving (each frame's own order is kept), and about twice as fast: the two
-  // frames' chains of dependent operations overlap.
+  // The next two frames of the clip, stream frames `frame` and frame + 1: the same as frame(frame, a…) then
+  // frame(frame + 1, b…), the symbols requested and the outputs given in another interleaving (each frame's own
+  // order is kept), and about twice as fast: the two frames' chains of dependent operations overlap.
   template <typename SymbolA, typename OutputA, typename SymbolB, typename OutputB>
-  void two_frames(const double* predictions_a, SymbolA symbol_a, OutputA output_a, const double* predictions_b,
-                  SymbolB symbol_b, OutputB output_b);
+  void two_frames(size_t frame, const double* predictions_a, SymbolA symbol_a, OutputA output_a,
+                  const double* predictions_b, SymbolB symbol_b, OutputB output_b);
+
+  // Frames of the clip reconstructed since start_clip().
+  size_t frame_in_clip() const { return frame_in_clip_; }
 
  private:
   template <typename F>
@@ -80,15 +85,23 @@ class ResidualReconstructor {
   template <bool kLossless, bool kTemporal, bool kSpatial, typename Symbol, typename Output>
   void vertex(size_t position, const double* predictions, Symbol& symbol, Output& output, const double* previous,
               double* current, double* change) const;
+  // The residuals of frame `in_clip` of the clip (allocated when first written).
+  double* slot(size_t in_clip);
+  // The reference residuals of stream frame `frame`, frame `in_clip` of the clip: its reference's, or zeros.
+  const double* reference(size_t frame, size_t in_clip);
 
+  const StreamContent& content_;
   const ResidualTraversal& traversal_;
   bool lossless_, temporal_, spatial_;
   double steps_[3];
-  // By position in the traversal (W × 3). change: what a later neighbour's spatial prediction reads of a
-  // reconstructed residual (c_j above), computed once per vertex. second_, second_change_: two_frames' second
-  // frame.
-  std::vector<double> previous_, current_, change_, second_, second_change_;
+  // By position in the traversal (W × 3). history_: the reconstructed residuals of the last reference_window + 2
+  // frames of the clip, frame j in history_[j % size] (the window, the frame being reconstructed and two_frames'
+  // second). change_: what a later neighbour's spatial prediction reads of a reconstructed residual (c_j above),
+  // computed once per vertex; second_change_: two_frames' second frame's.
+  std::vector<std::vector<double>> history_;
+  std::vector<double> zeros_, change_, second_change_;
   std::vector<double> inverse_count_;  // by position: 1 / n, n its number of earlier neighbours (0 when none)
+  size_t frame_in_clip_ = 0;
 };
 
 // The clips (original vertex order) of a content read by read_stream against `base`, with the base mesh's

@@ -65,36 +65,42 @@ SEGMORPH_ALWAYS_INLINE void ResidualReconstructor::vertex(size_t position, const
 }
 
 template <typename Symbol, typename Output>
-void ResidualReconstructor::frame(const double* predictions, Symbol symbol, Output output) {
+void ResidualReconstructor::frame(size_t frame, const double* predictions, Symbol symbol, Output output) {
+  const double* previous = reference(frame, frame_in_clip_);
+  double* current = slot(frame_in_clip_);
   with_flags([&](auto lossless, auto temporal, auto spatial) {
     for (size_t position = 0; position < traversal_.order.size(); ++position)
       vertex<decltype(lossless)::value, decltype(temporal)::value, decltype(spatial)::value>(
-          position, predictions, symbol, output, previous_.data(), current_.data(), change_.data());
+          position, predictions, symbol, output, previous, current, change_.data());
   });
-  previous_.swap(current_);
+  ++frame_in_clip_;
 }
 
 template <typename SymbolA, typename OutputA, typename SymbolB, typename OutputB>
-void ResidualReconstructor::two_frames(const double* predictions_a, SymbolA symbol_a, OutputA output_a,
+void ResidualReconstructor::two_frames(size_t frame, const double* predictions_a, SymbolA symbol_a, OutputA output_a,
                                        const double* predictions_b, SymbolB symbol_b, OutputB output_b) {
-  // The second frame runs one vertex behind the first: a vertex needs only its own residual in the frame
-  // before and its earlier neighbours' in its own frame, both done by then.
+  // The second frame runs one vertex behind the first: a vertex needs only its own residual in its reference (the
+  // first frame, whose vertex is done by then, or an earlier frame) and its earlier neighbours' in its own frame.
+  const double* previous_a = reference(frame, frame_in_clip_);
+  double* current_a = slot(frame_in_clip_);
+  const double* previous_b = reference(frame + 1, frame_in_clip_ + 1);
+  double* current_b = slot(frame_in_clip_ + 1);
   const size_t count = traversal_.order.size();
   with_flags([&](auto lossless, auto temporal, auto spatial) {
     constexpr bool kLossless = decltype(lossless)::value, kTemporal = decltype(temporal)::value,
                    kSpatial = decltype(spatial)::value;
     for (size_t position = 0; position < count; ++position) {
-      vertex<kLossless, kTemporal, kSpatial>(position, predictions_a, symbol_a, output_a, previous_.data(),
-                                             current_.data(), change_.data());
+      vertex<kLossless, kTemporal, kSpatial>(position, predictions_a, symbol_a, output_a, previous_a, current_a,
+                                             change_.data());
       if (position > 0)
-        vertex<kLossless, kTemporal, kSpatial>(position - 1, predictions_b, symbol_b, output_b, current_.data(),
-                                               second_.data(), second_change_.data());
+        vertex<kLossless, kTemporal, kSpatial>(position - 1, predictions_b, symbol_b, output_b, previous_b, current_b,
+                                               second_change_.data());
     }
     if (count > 0)
-      vertex<kLossless, kTemporal, kSpatial>(count - 1, predictions_b, symbol_b, output_b, current_.data(),
-                                             second_.data(), second_change_.data());
+      vertex<kLossless, kTemporal, kSpatial>(count - 1, predictions_b, symbol_b, output_b, previous_b, current_b,
+                                             second_change_.data());
   });
-  previous_.swap(second_);
+  frame_in_clip_ += 2;
 }
 
 }  // namespace segmorph

@@ -27,7 +27,8 @@ struct Models {
   UnsignedModel count;                 // header counts
   BitModel group_welded;               // a group of identical base positions is one welded vertex
   UnsignedModel group_member;          // else: earlier member each member equals, or "new"
-  std::array<SignedModel, 12> motion;  // per coefficient slot, deltas from the previous frame
+  UnsignedModel reference;             // version 3: each frame's reference distance
+  std::array<SignedModel, 12> motion;  // per coefficient slot, deltas from the reference (or previous) frame
   BitTreeModel extra_count{2};         // extra clusters per vertex (0..3)
   SignedModel weight;
   // The residuals' models are residual_coding.cpp's.
@@ -94,6 +95,26 @@ Status code_counts(Coder& coder, Models& models, const std::vector<float>& base,
   return Status::Ok();
 }
 
+// Version 3: the reference window, then each frame's reference distance, clip by clip.
+template <class Coder>
+Status code_references(Coder& coder, Models& models, StreamContent& content) {
+  if (!(content.flags & format::kFlagFrameReferences)) return Status::Ok();
+  coder.count(models.count, content.reference_window);
+  if (coder.failed() || content.reference_window == 0 || content.reference_window > format::kMaxReferenceDistance)
+    return corrupt("bad reference window");
+  size_t frame = 0;
+  for (uint32_t frames : content.clip_frames) {
+    for (uint32_t f = 0; f < frames; ++f, ++frame) {
+      coder.grow(content.references, frame + 1);
+      coder.count(models.reference, content.references[frame]);
+      if (content.references[frame] > f || content.references[frame] > content.reference_window)
+        return corrupt("a frame's reference is out of range");
+    }
+    if (coder.failed()) return coder.status();
+  }
+  return Status::Ok();
+}
+
 // Welding, group by group (groups of identical base positions, which the decoder finds itself): one bit "the group is
 // one welded vertex"; otherwise, for each member after the first, the position within the group of the earlier member
 // it welds to, or its own position when it starts a new welded vertex. Then the welded index of every vertex.
@@ -147,9 +168,11 @@ Status code_labels(Coder& coder, Models& models, StreamContent& content) {
   return Status::Ok();
 }
 
-// The motion: its two steps, then per frame and cluster 12 coefficients, each as its difference from the previous
-// frame's. The motion grows a frame at a time as it is read, never sized up front by the counts: a stream of a few
-// bytes can claim kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.
+// The motion: its two steps, then per frame and cluster 12 coefficients, each as its difference from the same
+// coefficient in the frame's reference (version 3, a reference distance d > 0: the frame d back) or else in the
+// previous frame of the stream (across clips; 0 for the first frame). The motion grows a frame at a time as it is
+// read, never sized up front by the counts: a stream of a few bytes can claim kMaxVertexFrames positions
+// (gigabytes), and its data runs out long before memory would.
 template <class Coder>
 Status code_motion(Coder& coder, Models& models, StreamContent& content) {
   coder.float_bits(content.linear_step);
@@ -159,12 +182,14 @@ Status code_motion(Coder& coder, Models& models, StreamContent& content) {
     return corrupt("bad motion quantizer steps");
   const size_t clusters = content.cluster_count, frames = content.frame_count();
   if (uint64_t(frames) * clusters > format::kMaxVertexFrames) return corrupt("too many clusters for its frames");
+  const bool references = content.flags & format::kFlagFrameReferences;
   for (size_t f = 0; f < frames; ++f) {
     coder.grow(content.motion, (f + 1) * clusters * 12);
+    const size_t back = references && content.references[f] > 0 ? content.references[f] : 1;
     for (size_t k = 0; k < clusters; ++k)
       for (size_t c = 0; c < 12; ++c) {
         const size_t index = (f * clusters + k) * 12 + c;
-        const int32_t previous = f == 0 ? 0 : content.motion[index - clusters * 12];
+        const int32_t previous = f == 0 ? 0 : content.motion[index - back * clusters * 12];
         int32_t delta = int32_t(int64_t(content.motion[index]) - previous);  // the writer's; the reader's overwritten
         coder.integer(models.motion[c], delta);
         const int64_t value = int64_t(previous) + delta;
@@ -207,6 +232,7 @@ Status code_weights(Coder& coder, Models& models, StreamContent& content) {
 template <class Coder>
 Status code_head(Coder& coder, Models& models, const std::vector<float>& base, StreamContent& content) {
   SEGMORPH_RETURN_IF_ERROR(code_counts(coder, models, base, content));
+  SEGMORPH_RETURN_IF_ERROR(code_references(coder, models, content));
   SEGMORPH_RETURN_IF_ERROR(code_welding(coder, models, base, content));
   SEGMORPH_RETURN_IF_ERROR(code_labels(coder, models, content));
   SEGMORPH_RETURN_IF_ERROR(code_motion(coder, models, content));
@@ -232,6 +258,15 @@ Status code_residual_steps(Coder& coder, StreamContent& content) {
 
 size_t StreamContent::frame_count() const {
   return std::accumulate(clip_frames.begin(), clip_frames.end(), size_t(0));
+}
+
+uint32_t frame_reference(const StreamContent& content, size_t frame, size_t frame_in_clip) {
+  if (content.flags & format::kFlagFrameReferences) return content.references[frame];
+  return (content.flags & format::kFlagTemporalResiduals) && frame_in_clip > 0 ? 1 : 0;
+}
+
+uint32_t reference_window(const StreamContent& content) {
+  return content.flags & format::kFlagFrameReferences ? content.reference_window : 1;
 }
 
 int64_t ordered_bits(float x) {
@@ -275,7 +310,9 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   const size_t start = out.size();
   out.insert(out.end(), std::begin(format::kMagic), std::end(format::kMagic));
   const bool table = content.flags & format::kFlagTableResiduals;
-  out.push_back(table ? format::kTableVersion : format::kVersion);
+  const bool references = content.flags & format::kFlagFrameReferences;
+  assert(!references || content.references.size() == content.frame_count());
+  out.push_back(references ? format::kReferenceVersion : table ? format::kTableVersion : format::kVersion);
   out.push_back(content.flags);
   const size_t length_at = out.size();
   out.insert(out.end(), 4, 0);  // body length, filled in at the end
@@ -328,13 +365,19 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
   if (size < format::kHeaderBytes || std::memcmp(data, format::kMagic, 4) != 0)
     return Status(StatusCode::bad_data, "not a segmorph animation stream (bad magic)");
   const uint8_t version = data[4];
-  if (version != format::kVersion && version != format::kTableVersion)
+  if (version < format::kVersion || version > format::kNewestVersion)
     return Status(StatusCode::unsupported, "animation stream version " + std::to_string(version) +
                                                " (this decoder reads versions " + std::to_string(format::kVersion) +
                                                " to " + std::to_string(format::kNewestVersion) + ")");
   content.flags = data[5];
-  const uint8_t known = version == format::kVersion ? format::kKnownFlags : format::kKnownTableVersionFlags;
+  const uint8_t known = version == format::kVersion        ? format::kKnownFlags
+                        : version == format::kTableVersion ? format::kKnownTableVersionFlags
+                                                           : format::kKnownReferenceVersionFlags;
   if (content.flags & ~known) return Status(StatusCode::bad_data, "animation stream has unknown flags");
+  if (version == format::kReferenceVersion && (content.flags & (format::kFlagFrameReferences |
+                                                                format::kFlagTemporalResiduals)) !=
+                                                  (format::kFlagFrameReferences | format::kFlagTemporalResiduals))
+    return Status(StatusCode::bad_data, "animation stream of version 3 without frame references or temporal residuals");
   const bool table = content.flags & format::kFlagTableResiduals;
   if (table && (content.flags & format::kFlagLossless))
     return Status(StatusCode::bad_data, "animation stream: the table residual code in a lossless stream");

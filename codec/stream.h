@@ -23,6 +23,12 @@ struct StreamContent {
   std::vector<uint32_t> welded_index;
   uint32_t welded_count = 0;
   std::vector<uint32_t> clip_frames;  // frames per clip; F = their sum
+  // Version 3 (kFlagFrameReferences): per frame, how many frames back in its clip the frame its motion and
+  // residuals are predicted from lies (0: none, the residuals are predicted from zero), at most reference_window
+  // and the frame's index in its clip. Without the flag both are unused (frame_reference() gives the references
+  // versions 1 and 2 imply).
+  uint32_t reference_window = 0;
+  std::vector<uint32_t> references;
   uint32_t cluster_count = 0;         // K
   std::vector<uint32_t> labels;       // W: cluster of each welded vertex
   // Motion: per frame and cluster, 12 integers: the 9 entries of L − I in units of linear_step, then the 3 of
@@ -45,6 +51,14 @@ struct StreamContent {
 
   size_t frame_count() const;
 };
+
+// The reference distance of stream frame `frame`, which is frame `frame_in_clip` of its clip: content.references's
+// with kFlagFrameReferences, else the previous frame's (1) with temporal residuals past a clip's first frame, else 0.
+uint32_t frame_reference(const StreamContent& content, size_t frame, size_t frame_in_clip);
+
+// The largest reference distance a decoder of the content holds frames for: reference_window with
+// kFlagFrameReferences, else 1.
+uint32_t reference_window(const StreamContent& content);
 
 // Byte offsets of the parts of an encoded stream, for reports.
 struct StreamSizes {

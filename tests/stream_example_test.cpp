@@ -153,5 +153,121 @@ TEST(StreamExample, DecodesToTheAppendixFrames) {
   }
 }
 
+// The worked example of version 3 (spec/bitstream.md, section 9.7): the same mesh, clusters, weights and steps, one
+// clip of 4 frames whose frames 2 and 3 name frames 0 and 1 as their references (window 2).
+constexpr char kReferenceExampleHex[] =
+    "53474d4103163e00000010023ae6a02f4034f06e3dd826442509eaa00000000b8529a2402d4604caa68424224eb9e57e"
+    "9b20c6b3d9b825c1d8b836be2eb382b857f31cf5e487e30a";
+
+// Its decoded frames: "frame vertex x y z", binary32 bit patterns.
+constexpr char kReferenceExampleFrames[] =
+    "0 0 00000000 00000000 00000000\n"
+    "0 1 3f800000 00000000 00000000\n"
+    "0 2 40000000 00000000 00000000\n"
+    "0 3 00000000 3f7d70a4 00000000\n"
+    "0 4 3f800000 3f7f258c 00000000\n"
+    "0 5 40000000 3f7fb72f 00000000\n"
+    "0 6 3f800000 3f7f258c 00000000\n"
+    "0 7 400147ae ba11a2b4 00000000\n"
+    "1 0 3cd1eb85 00000000 00000000\n"
+    "1 1 3f82c7ae bc23d70a 3d800000\n"
+    "1 2 40009bd7 bc23d70a 3ea2b852\n"
+    "1 3 3cd1eb85 3f7d70a4 00000000\n"
+    "1 4 3f807852 3f7e4b18 3d51eb85\n"
+    "1 5 4000369d 3f7db975 3e8da741\n"
+    "1 6 3f807852 3f7e4b18 3d51eb85\n"
+    "1 7 4001b4e8 3a11a2b4 3e8bf259\n"
+    "2 0 00000000 00000000 00000000\n"
+    "2 1 3f800000 00000000 3b800000\n"
+    "2 2 40000000 00000000 3c840000\n"
+    "2 3 00000000 3f7d70a4 00000000\n"
+    "2 4 3f800000 3f7f258c 3b000000\n"
+    "2 5 40000000 3f7fb72f 3c800000\n"
+    "2 6 3f800000 3f7f258c 3b000000\n"
+    "2 7 400147ae ba11a2b4 3c800000\n"
+    "3 0 3cd1eb85 00000000 00000000\n"
+    "3 1 3f82c7ae bc23d70a 3d800000\n"
+    "3 2 40009bd7 bc23d70a 3ea2b852\n"
+    "3 3 3cd1eb85 3f7d70a4 00000000\n"
+    "3 4 3f81c000 3f7e4b18 3d51eb85\n"
+    "3 5 40006d3a 3f7db975 3e8da741\n"
+    "3 6 3f81c000 3f7e4b18 3d51eb85\n"
+    "3 7 4001d037 3a11a2b4 3e8bf259\n";
+
+StreamContent reference_example_content() {
+  StreamContent c = example_content();
+  c.flags |= format::kFlagFrameReferences;
+  c.clip_frames = {4};
+  c.reference_window = 2;
+  c.references = {0, 1, 2, 2};
+  c.motion = {
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  0, 0, 0,   // frame 0, cluster 0
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  0, 0, 0,   // frame 0, cluster 1
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  1, 0, 0,   // frame 1, cluster 0
+      0, 0, 0, 0, 0, 0, 0, 0, -2, 0, 0, 16,  // frame 1, cluster 1
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  0, 0, 0,   // frame 2, cluster 0: frame 0's
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  0, 0, 1,   // frame 2, cluster 1: frame 0's but slot 11
+      0, 0, 0, 0, 0, 0, 0, 0, 0,  1, 0, 0,   // frame 3, cluster 0: frame 1's
+      0, 0, 0, 0, 0, 0, 0, 0, -2, 0, 0, 16,  // frame 3, cluster 1: frame 1's
+  };
+  // clang-format off
+  c.residuals = {
+      // welded vertex 0, 1, ..., 6; x, y, z each
+      0, 0, 0,  0, 0, 0,   0, 0, 0,  0, -1, 0,  0, 0, 0,   0, 0, 0,   2, 0, 0,   // frame 0
+      1, 0, 0,  0, -1, 0,  0, 0, 3,  0, 0, 0,   -2, 0, 1,  0, 0, 0,   0, 1, -1,  // frame 1
+      0, 0, 0,  0, 0, 0,   0, 0, 0,  0, 0, 0,   0, 0, 0,   0, 0, 0,   0, 0, 0,   // frame 2
+      0, 0, 0,  0, 0, 0,   0, 0, 0,  0, 0, 0,   1, 0, 0,   0, 0, 0,   0, 0, 0,   // frame 3
+  };
+  // clang-format on
+  return c;
+}
+
+std::vector<uint8_t> reference_written() {
+  std::vector<uint8_t> bytes;
+  write_stream(reference_example_content(), example_base(), bytes);
+  return bytes;
+}
+
+TEST(StreamExample, VersionThreeBytesAreTheAppendixBytes) {
+  EXPECT_EQ(hex(reference_written()), kReferenceExampleHex) << "update kReferenceExampleHex and spec/bitstream.md 9.7";
+}
+
+TEST(StreamExample, VersionThreeReadsBackTheContent) {
+  const std::vector<uint8_t> bytes = reference_written();
+  ASSERT_GT(bytes.size(), 5u);
+  EXPECT_EQ(bytes[4], format::kReferenceVersion);
+  StreamContent read;
+  const Status status = read_stream(bytes.data(), bytes.size(), example_base(), read);
+  ASSERT_TRUE(status.ok()) << status.message();
+  const StreamContent want = reference_example_content();
+  EXPECT_EQ(read.flags, want.flags);
+  EXPECT_EQ(read.clip_frames, want.clip_frames);
+  EXPECT_EQ(read.reference_window, want.reference_window);
+  EXPECT_EQ(read.references, want.references);
+  EXPECT_EQ(read.motion, want.motion);
+  EXPECT_EQ(read.residuals, want.residuals);
+}
+
+// Frame 2 repeats frame 0 but for cluster 1's z translation, one step up: its residuals are all zero, predicted from
+// frame 0's. Frame 3 repeats frame 1 but for welded vertex 4's x, one step right.
+TEST(StreamExample, VersionThreeDecodesToTheAppendixFrames) {
+  const std::vector<uint8_t> bytes = reference_written();
+  std::vector<FrameSequence> clips;
+  const Status status = decode_animation(bytes.data(), bytes.size(), example_base(), example_triangles(), clips);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(clips.size(), 1u);
+  ASSERT_EQ(clips[0].frame_count, 4u);
+  std::string printed;
+  for (size_t frame = 0; frame < 4; ++frame)
+    for (size_t v = 0; v < 8; ++v) {
+      char line[64];
+      uint32_t bits[3];
+      std::memcpy(bits, clips[0].frame(frame) + v * 3, 12);
+      std::snprintf(line, sizeof(line), "%zu %zu %08x %08x %08x\n", frame, v, bits[0], bits[1], bits[2]);
+      printed += line;
+    }
+  EXPECT_EQ(printed, kReferenceExampleFrames) << "update kReferenceExampleFrames and spec/bitstream.md 9.7";
+}
+
 }  // namespace
 }  // namespace segmorph

@@ -104,6 +104,13 @@ CodecSettings predictors(CodecSettings settings, bool temporal, bool spatial) {
   return settings;
 }
 
+// The version byte a stream of the table code (or of the adaptive code: `plain`) has: version 3 when the encoder gave
+// some frame an earlier reference than the previous one (the jumping vertex of animated(…, true) does), else 2 (1).
+uint8_t version_for(const std::vector<uint8_t>& stream, bool plain = false) {
+  if (stream[5] & format::kFlagFrameReferences) return format::kReferenceVersion;
+  return plain ? format::kVersion : format::kTableVersion;
+}
+
 uint32_t body_length(const std::vector<uint8_t>& stream) {
   return uint32_t(stream[6]) | uint32_t(stream[7]) << 8 | uint32_t(stream[8]) << 16 | uint32_t(stream[9]) << 24;
 }
@@ -162,7 +169,7 @@ TEST(TableResiduals, DecodingGivesTheEncodersReconstructionExactly) {
     const std::vector<float> base = quantized_base(c.clips[0]);
     const Encoded encoded = encode(c.clips, base, c.settings);
     ASSERT_GT(encoded.stream.size(), format::kHeaderBytes);
-    EXPECT_EQ(encoded.stream[4], format::kTableVersion);
+    EXPECT_EQ(encoded.stream[4], version_for(encoded.stream));
     EXPECT_TRUE(encoded.stream[5] & format::kFlagTableResiduals);
     flags_seen |= encoded.stream[5];
     flags_missed |= uint8_t(~encoded.stream[5]);
@@ -245,7 +252,7 @@ TEST(TableResiduals, LosslessIgnoresTheSetting) {
   lossless.mode = RateMode::lossless;
   const Encoded encoded = encode(clips, base, table(lossless));
   EXPECT_EQ(encoded.stream, encode(clips, base, lossless).stream);
-  EXPECT_EQ(encoded.stream[4], format::kVersion);
+  EXPECT_EQ(encoded.stream[4], version_for(encoded.stream, true));
   EXPECT_FALSE(encoded.stream[5] & format::kFlagTableResiduals);
   EXPECT_TRUE(encoded.stream[5] & format::kFlagLossless);
   std::vector<FrameSequence> decoded;
@@ -266,7 +273,7 @@ TEST(TableResiduals, RateTargetWithinFivePercent) {
     settings.mode = RateMode::bpvf;
     settings.target = target;
     const Encoded encoded = encode(clips, base, table(settings));
-    EXPECT_EQ(encoded.stream[4], format::kTableVersion);
+    EXPECT_EQ(encoded.stream[4], version_for(encoded.stream));
     EXPECT_NEAR(bits_per_vertex_frame(encoded.stream.size(), clips[0].vertex_count, clips[0].frame_count), target,
                 0.05 * target);
   }
@@ -309,7 +316,7 @@ void expect_residuals_round_trip(const TableStream& s, const std::vector<int64_t
   std::vector<uint8_t> stream;
   write_stream(content, s.base, stream);
   ASSERT_GT(stream.size(), format::kHeaderBytes);
-  EXPECT_EQ(stream[4], format::kTableVersion);
+  EXPECT_EQ(stream[4], version_for(stream));
   EXPECT_TRUE(stream[5] & format::kFlagTableResiduals);
   StreamContent read;
   const Status status = read_stream(stream.data(), stream.size(), s.base, read);

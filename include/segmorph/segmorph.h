@@ -169,7 +169,7 @@ struct EncodeSettings {
   // What a morph-target mesh (unskinned, one node) stores: its targets or its frames; automatic encodes both ways
   // where it has at most half as many targets as frames and keeps the smaller file. Lossless encodes bake.
   enum class Targets { automatic, keep, bake } targets = Targets::automatic;
-  // The residuals in the table code of stream version 2: faster decoding, larger files. Lossy encodes only.
+  // The residuals in the table code of stream version 2 (or 3): faster decoding, larger files. Lossy encodes only.
   bool fast_decode = false;
   // Threads for the stages that split their work (the motion fits and refinement, the residual steps' measurement of
   // rate control, the comparison with the input); 0: every hardware thread. The output is the same bytes for every

@@ -1,7 +1,8 @@
 // Writes the seed corpus of fuzz_animation_stream: valid streams of small synthetic animations of the fuzzer's
 // base mesh, one per codec configuration (lossy at several targets, lossless, fixed cluster counts, each residual
-// predictor on and off, several clips; version 1 with the adaptive residual code and version 2 with the table code),
-// so that mutations start from every path of the decoder. Each stream is checked to be of the version its settings
+// predictor on and off, several clips; version 1 with the adaptive residual code, version 2 with the table code and
+// version 3 with frame references, on animations that repeat their frames), so that mutations start from every path
+// of the decoder. Each stream is checked to be of the version its settings
 // ask for and to decode to the encoder's reconstruction before it is written.
 //
 //   fuzz_seeds OUTPUT_DIRECTORY
@@ -50,7 +51,8 @@ std::vector<float> frame_positions(const BaseMesh& mesh, size_t clip, size_t f, 
   return positions;
 }
 
-std::vector<FrameSequence> animation(const BaseMesh& mesh, const std::vector<size_t>& clip_frames) {
+// Clips of the given frame counts; with a period, each clip repeats its first `period` frames (a cycle played again).
+std::vector<FrameSequence> animation(const BaseMesh& mesh, const std::vector<size_t>& clip_frames, size_t period) {
   std::vector<FrameSequence> clips;
   for (size_t c = 0; c < clip_frames.size(); ++c) {
     FrameSequence clip;
@@ -58,7 +60,8 @@ std::vector<FrameSequence> animation(const BaseMesh& mesh, const std::vector<siz
     clip.frame_count = clip_frames[c];
     clip.triangles = mesh.triangles;
     for (size_t f = 0; f < clip.frame_count; ++f) {
-      const std::vector<float> frame = frame_positions(mesh, c, f, clip.frame_count);
+      const std::vector<float> frame = period ? frame_positions(mesh, c, f % period, period)
+                                              : frame_positions(mesh, c, f, clip.frame_count);
       clip.positions.insert(clip.positions.end(), frame.begin(), frame.end());
       clip.times.push_back(float(f) / 30);
     }
@@ -71,22 +74,28 @@ struct Seed {
   const char* name;
   CodecSettings settings;
   std::vector<size_t> clip_frames;
+  size_t period = 0;  // with frame references: the clips repeat their frames with this period
 };
 
+// Without frame references unless references(): the seeds of versions 1 and 2 stay of those versions whatever the
+// encoder finds in their frames.
 CodecSettings lossy(double error) {
   CodecSettings settings;
   settings.target = error;
+  settings.frame_references = false;
   return settings;
 }
 
 CodecSettings lossless() {
   CodecSettings settings;
   settings.mode = RateMode::lossless;
+  settings.frame_references = false;
   return settings;
 }
 
 CodecSettings bpvf(double bits) {
   CodecSettings settings;
+  settings.frame_references = false;
   settings.mode = RateMode::bpvf;
   settings.target = bits;
   return settings;
@@ -106,6 +115,12 @@ CodecSettings with_residuals(CodecSettings settings, bool temporal, bool spatial
 // The residuals in the table code (stream version 2).
 CodecSettings table(CodecSettings settings) {
   settings.table_residuals = true;
+  return settings;
+}
+
+// Each frame's reference chosen by the encoder (stream version 3).
+CodecSettings references(CodecSettings settings) {
+  settings.frame_references = true;
   return settings;
 }
 
@@ -138,6 +153,11 @@ std::vector<Seed> seeds() {
       {"table_three_clips", table(lossy(0.15)), {6, 3, 1}},
       {"table_clusters_1_no_prediction", table(with_residuals(with_clusters(lossy(0.15), 1), false, false)), {6}},
       {"table_plain_temporal_only", table(with_residuals(plain(lossy(0.15)), true, false)), {7}},
+      {"references_error_0.15", references(lossy(0.15)), {12}, 4},
+      {"references_error_0.5_two_clips", references(lossy(0.5)), {9, 8}, 3},
+      {"references_bpvf_4", references(bpvf(4)), {10}, 5},
+      {"references_lossless", references(lossless()), {8, 6}, 3},
+      {"references_table", table(references(lossy(0.15))), {12}, 4},
   };
 }
 
@@ -159,11 +179,11 @@ int main(int argc, char** argv) {
   }
   const fuzz::BaseMesh mesh = fuzz::base_mesh();
   for (const fuzz::Seed& seed : fuzz::seeds()) {
-    const std::vector<FrameSequence> clips = fuzz::animation(mesh, seed.clip_frames);
+    const std::vector<FrameSequence> clips = fuzz::animation(mesh, seed.clip_frames, seed.period);
     std::vector<uint8_t> stream;
     std::vector<FrameSequence> reconstruction, decoded;
     Status status = encode_animation(clips, mesh.positions, seed.settings, stream, nullptr, &reconstruction);
-    const int version = seed.settings.table_residuals ? 2 : 1;
+    const int version = seed.settings.frame_references ? 3 : seed.settings.table_residuals ? 2 : 1;
     if (status.ok() && (stream.size() < 5 || stream[4] != version))
       status = Status(StatusCode::internal, "not a version-" + std::to_string(version) + " stream");
     if (status.ok()) status = decode_animation(stream.data(), stream.size(), mesh.positions, mesh.triangles, decoded);

@@ -1,0 +1,179 @@
+// Frame references (stream version 3, codec/frame_references.h): the encoder gives a frame an earlier reference than
+// the previous one where the motion repeats itself, keeps them only when they pay, and every way of decoding (whole
+// clips, one frame or two at a time, after a seek) gives the encoder's frames; the decoder refuses references a
+// stream may not hold.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+
+#include "frame_decoder.h"
+#include "range_coder.h"
+#include "stream.h"
+#include "stream_format.h"
+#include "test_meshes.h"
+
+namespace segmorph {
+namespace {
+
+using testing::encode;
+using testing::Encoded;
+using testing::quantized_base;
+
+// A bending sphere whose first `period` frames play again and again until `frames`: a cycle, as a gait's.
+FrameSequence cycling_clip(size_t frames, size_t period, double phase = 0) {
+  const FrameSequence cycle = testing::bending_clip(period, 1.0, phase);
+  FrameSequence clip = cycle;
+  clip.frame_count = frames;
+  clip.positions.clear();
+  clip.times.clear();
+  for (size_t f = 0; f < frames; ++f) {
+    const float* frame = cycle.frame(f % period);
+    clip.positions.insert(clip.positions.end(), frame, frame + cycle.vertex_count * 3);
+    clip.times.push_back(float(f) / 30);
+  }
+  return clip;
+}
+
+CodecSettings without_references(CodecSettings settings = CodecSettings()) {
+  settings.frame_references = false;
+  return settings;
+}
+
+// A cycle played three times: version 3, its two repeats costing less than a fifth of what the first cycle costs
+// alone (without references each costs about as much as the first), the error target met, and the decoder's frames
+// the encoder's.
+TEST(FrameReferences, ARepeatedCycleIsVersionThreeAndCostsLittleMore) {
+  const std::vector<FrameSequence> clips = {cycling_clip(36, 12)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  const Encoded with = encode(clips, base, CodecSettings()), without = encode(clips, base, without_references());
+  const Encoded once = encode({cycling_clip(12, 12)}, base, CodecSettings());
+  ASSERT_GT(with.stream.size(), 5u);
+  EXPECT_EQ(with.stream[4], format::kReferenceVersion);
+  EXPECT_TRUE(with.stream[5] & format::kFlagFrameReferences);
+  EXPECT_EQ(without.stream[4], format::kVersion);
+  EXPECT_LT(double(with.stream.size()), 1.2 * double(once.stream.size()))
+      << with.stream.size() << " bytes with references, " << once.stream.size() << " for one cycle";
+  EXPECT_GT(double(without.stream.size()), 1.8 * double(once.stream.size()))
+      << without.stream.size() << " bytes without references, " << once.stream.size() << " for one cycle";
+  EXPECT_LE(testing::kg(clips, with.reconstruction), 0.15 * 1.0001);
+
+  StreamContent content;
+  ASSERT_TRUE(read_stream(with.stream.data(), with.stream.size(), base, content).ok());
+  ASSERT_EQ(content.references.size(), 36u);
+  size_t long_references = 0;
+  for (size_t f = 12; f < 36; ++f) long_references += content.references[f] % 12 == 0 && content.references[f] > 0;
+  EXPECT_GE(long_references, 20u) << "the repeats should reference the frames a whole cycle back";
+
+  std::vector<FrameSequence> decoded;
+  ASSERT_TRUE(decode_animation(with.stream.data(), with.stream.size(), base, clips[0].triangles, decoded).ok());
+  ASSERT_EQ(decoded.size(), 1u);
+  EXPECT_EQ(decoded[0].positions, with.reconstruction[0].positions);
+}
+
+// Lossless streams too: the frames come back bit for bit, in fewer bytes than without references.
+TEST(FrameReferences, LosslessRepeatsAreSmallerAndExact) {
+  const std::vector<FrameSequence> clips = {cycling_clip(24, 8)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  CodecSettings lossless;
+  lossless.mode = RateMode::lossless;
+  const Encoded with = encode(clips, base, lossless), without = encode(clips, base, without_references(lossless));
+  EXPECT_EQ(with.stream[4], format::kReferenceVersion);
+  EXPECT_LT(with.stream.size(), without.stream.size());
+  std::vector<FrameSequence> decoded;
+  ASSERT_TRUE(decode_animation(with.stream.data(), with.stream.size(), base, clips[0].triangles, decoded).ok());
+  ASSERT_EQ(decoded[0].positions.size(), clips[0].positions.size());
+  EXPECT_EQ(std::memcmp(decoded[0].positions.data(), clips[0].positions.data(), clips[0].positions.size() * 4), 0);
+}
+
+// A motion that never comes back to a pose keeps the implied references: the same bytes as without the setting, in a
+// version 1 stream.
+TEST(FrameReferences, MotionThatDoesNotRepeatStaysVersionOne) {
+  const std::vector<FrameSequence> clips = {testing::bending_clip(20, 1.2, 0.3)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  const Encoded with = encode(clips, base, CodecSettings()), without = encode(clips, base, without_references());
+  EXPECT_EQ(with.stream[4], format::kVersion);
+  EXPECT_EQ(with.stream, without.stream);
+}
+
+// Every way of decoding gives the same floats: two frames at a time (whose second frame references an earlier one
+// than the first), one at a time, and from a clip reached by seeking back.
+TEST(FrameReferences, OneOrTwoFramesAtATimeAndAfterASeekAreTheEncodersFrames) {
+  const std::vector<FrameSequence> clips = {cycling_clip(15, 5), cycling_clip(13, 4, 1.0)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  const Encoded encoded = encode(clips, base, CodecSettings());
+  ASSERT_EQ(encoded.stream[4], format::kReferenceVersion);
+  const size_t row = clips[0].vertex_count * 3;
+  for (bool two : {false, true}) {
+    SCOPED_TRACE(two ? "two at a time" : "one at a time");
+    FrameDecoder decoder;
+    ASSERT_TRUE(decoder.open(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles).ok());
+    for (int pass = 0; pass < 2; ++pass) {  // the second pass after seeking back to clip 0
+      for (size_t c = 0; c < clips.size(); ++c) {
+        std::vector<float> frames;
+        while (decoder.next_clip() == c) {
+          const bool pair = two && decoder.frames_left_in_clip() >= 2;
+          ASSERT_TRUE(decoder.decode_append(pair, frames).ok());
+        }
+        EXPECT_EQ(frames, encoded.reconstruction[c].positions) << "clip " << c << ", pass " << pass;
+        EXPECT_EQ(frames.size(), clips[c].frame_count * row);
+      }
+      ASSERT_TRUE(decoder.seek(0).ok());
+    }
+  }
+}
+
+// The head of a version-3 stream for 3 vertices, one clip of `frames` frames, up to its frame references (what comes
+// after them is missing: a decoder must refuse the references before it reads on).
+std::vector<uint8_t> head_with_references(uint32_t frames, uint32_t window, const std::vector<uint32_t>& references,
+                                          uint8_t version = format::kReferenceVersion,
+                                          uint8_t flags = format::kFlagTemporalResiduals |
+                                                          format::kFlagFrameReferences) {
+  std::vector<uint8_t> out = {'S', 'G', 'M', 'A', version, flags, 0, 0, 0, 0};
+  {
+    RangeEncoder encoder(out);
+    UnsignedModel count, reference;
+    count.encode(encoder, 3);
+    count.encode(encoder, 1);
+    count.encode(encoder, frames);
+    count.encode(encoder, window);
+    for (uint32_t d : references) reference.encode(encoder, d);
+    encoder.finish();
+  }
+  const uint32_t length = uint32_t(out.size() - format::kHeaderBytes);
+  for (int i = 0; i < 4; ++i) out[6 + size_t(i)] = uint8_t(length >> (8 * i));
+  return out;
+}
+
+std::string refusal(const std::vector<uint8_t>& stream) {
+  const std::vector<float> base = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  StreamContent content;
+  const Status status = read_stream(stream.data(), stream.size(), base, content);
+  EXPECT_EQ(status.code(), StatusCode::bad_data);
+  return status.message();
+}
+
+// References a stream may not hold are refused as bad data before anything is read or sized by them: a window of
+// 0 or above 255, a reference beyond the frame's index in its clip or beyond the window; version 3 without its flags,
+// and the flag in version 2.
+TEST(FrameReferences, ReferencesAStreamMayNotHoldAreRefused) {
+  EXPECT_NE(refusal(head_with_references(4, 0, {})).find("bad reference window"), std::string::npos);
+  EXPECT_NE(refusal(head_with_references(4, 256, {})).find("bad reference window"), std::string::npos);
+  EXPECT_NE(refusal(head_with_references(4, 2, {0, 1, 3})).find("reference is out of range"), std::string::npos);
+  EXPECT_NE(refusal(head_with_references(4, 2, {0, 1, 1, 3})).find("reference is out of range"), std::string::npos);
+  EXPECT_NE(refusal(head_with_references(4, 3, {1})).find("reference is out of range"), std::string::npos);
+  EXPECT_NE(refusal(head_with_references(4, 2, {0, 1}, format::kReferenceVersion, format::kFlagFrameReferences))
+                .find("without frame references or temporal residuals"),
+            std::string::npos);
+  EXPECT_NE(refusal(head_with_references(4, 2, {0, 1}, format::kReferenceVersion, format::kFlagTemporalResiduals))
+                .find("without frame references or temporal residuals"),
+            std::string::npos);
+  EXPECT_NE(refusal(head_with_references(4, 2, {0, 1}, format::kTableVersion)).find("unknown flags"),
+            std::string::npos);
+  // The same head with valid references gets past them (and then runs out of data).
+  const std::string later = refusal(head_with_references(4, 2, {0, 1, 2, 1}));
+  EXPECT_EQ(later.find("reference"), std::string::npos) << later;
+}
+
+}  // namespace
+}  // namespace segmorph
