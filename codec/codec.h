@@ -27,11 +27,14 @@ struct CodecSettings {
   bool curvature_refinement = true;  // Eq. 6
   bool motion_refinement = true;     // beyond the paper: boundary vertices follow the best-fitting motion
   bool blend_weights = true;         // Eq. 3; off: each vertex follows its own cluster only
-  bool temporal_residuals = true;    // beyond the paper: residuals predicted from the previous frame's
+  bool temporal_residuals = true;    // beyond the paper: residuals predicted from the previous (or reference) frame's
   bool spatial_residuals = true;     // beyond the paper: ... and from already decoded neighbours'
   // Beyond the paper: a frame's motion and residuals predicted from an earlier frame than the previous one where it
   // predicts much better (stream version 3; frame_references.h). With temporal residuals only.
   bool frame_references = true;
+  // Beyond the paper: the motion's differences coded in contexts, and predicted linearly, where that takes fewer
+  // bytes (stream version 3).
+  bool motion_contexts = true;
   // Beyond the paper: the residuals in the table code of stream version 2 (table_residual_coding.h), which decodes
   // faster and costs more bytes than the adaptive code. Lossy modes only.
   bool table_residuals = false;

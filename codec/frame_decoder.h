@@ -29,7 +29,7 @@ class FrameLoop {
   FrameLoop(const FrameLoop&) = delete;
   FrameLoop& operator=(const FrameLoop&) = delete;
 
-  // Starts a clip: the previous frame's residuals are 0.
+  // Starts a clip: its first frame has no reference.
   void start_clip();
 
   // Reconstructs stream frame `frame` into first (V × 3 floats) and, when `second` is not null, frame + 1 (of the

@@ -23,10 +23,9 @@ constexpr size_t kFinalists = 2;
 
 }  // namespace
 
-uint32_t largest_reference_window(size_t welded) {
-  const size_t frame_bytes = std::max<size_t>(welded, 1) * 3 * sizeof(double);
-  const size_t frames = (size_t(64) << 20) / frame_bytes;
-  return uint32_t(std::clamp<size_t>(frames > 2 ? frames - 2 : 1, 1, format::kMaxReferenceDistance));
+uint32_t largest_reference_window(size_t vertices) {
+  const uint64_t window = format::kMaxReferenceWindowVertices / std::max<uint64_t>(vertices, 1);
+  return uint32_t(std::clamp<uint64_t>(window, 1, format::kMaxReferenceDistance));
 }
 
 FrameReferences choose_frame_references(const StreamContent& content, const ResidualTraversal& traversal,

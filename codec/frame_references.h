@@ -28,8 +28,7 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
                                         const std::vector<float>& base_welded, const std::vector<float>& targets,
                                         uint32_t max_window, double step);
 
-// The largest window a decoder of W welded vertices holds at most 64 MiB of residuals for (the window and two
-// frames of W × 3 doubles), within the format's limit; at least 1.
-uint32_t largest_reference_window(size_t welded);
+// The largest window a stream of V vertices may have (format::kMaxReferenceWindowVertices), at least 1.
+uint32_t largest_reference_window(size_t vertices);
 
 }  // namespace segmorph

@@ -100,7 +100,7 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
   for (size_t v = 0; v < welded; ++v) frame_weight[traversal.position[v]] = multiplicity[v];
   // Each frame's lanes' residuals are held while a later frame may use them as its reference: the next frame of the
   // clip, or a later one that references it from further back (until the last). Frames without a reference read
-  // zeros. The buffers are reused.
+  // zeros (as without temporal residuals: the same doubles). The buffers are reused.
   const size_t frame_count = content.frame_count();
   std::vector<size_t> last_use(frame_count, 0);
   for (size_t c = 0, first = 0; c < content.clip_frames.size(); first += content.clip_frames[c++])
@@ -109,7 +109,6 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
       if (back > 0) last_use[first + f - back] = std::max(last_use[first + f - back], first + f);
     }
   std::vector<std::pair<size_t, std::vector<double>>> held;  // (frame, its lanes' residuals)
-  const std::vector<double> none(welded * count, 0.0);
   size_t frame = 0;
   for (uint32_t frames : content.clip_frames) {
     std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
@@ -123,7 +122,7 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
         }
       // The reference's residuals (the temporal prediction), and this frame's.
       const size_t back = frame_reference(content, frame, f);
-      const double* reference = none.data();
+      const double* reference = nullptr;  // none: zeros
       for (const auto& entry : held)
         if (back > 0 && entry.first == frame - back) reference = entry.second.data();
       std::vector<double> current;
@@ -136,7 +135,7 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
           p[s] = frame_prediction[position * 3 + lane_axis[s]];
           target[s] = frame_target[position * 3 + lane_axis[s]];
         }
-        const double* last = temporal ? &reference[at] : zeros.data();
+        const double* last = temporal && reference ? &reference[at] : zeros.data();
         for (size_t s = 0; s < count; ++s) r[s] = last[s];
         if (spatial && end > begin) {
           std::fill(sum.begin(), sum.end(), 0.0);

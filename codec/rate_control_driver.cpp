@@ -7,18 +7,18 @@
 #include <string>
 
 #include "frame_references.h"
-#include "stream_format.h"
 #include "motion_quantization.h"
 #include "rate_control.h"
 #include "rate_target.h"
 #include "reconstruction.h"
+#include "stream_format.h"
 #include "vertex_gather.h"
 
 namespace segmorph {
 namespace {
 
 // Frame references (stream version 3) are kept only when they promise at least 1 % fewer bytes (or, with a rate
-// target, 1 % less distortion): the promise is measured at fewer steps without them than with them.
+// target, 1 % less distortion).
 constexpr double kReferenceMinGain = 0.99;
 
 // Other motion step ratios tried with an error target (which one wins depends on the sequence: docs/codec.md).
@@ -48,6 +48,7 @@ class RateControlDriver {
   void prepare_motion(double motion_step);
   void choose_references();
   void drop_references();
+  void choose_motion_coding();
   double estimated_cost();
   bool keep_references();
   bool references_rejected();
@@ -134,6 +135,7 @@ void RateControlDriver::prepare_motion(double motion_step) {
                               p_.base_welded, p_.trajectories, clusters_, p_.adjacency, settings_.blend_weights,
                               content_);
   if (!references_chosen_) choose_references();
+  choose_motion_coding();
   report_.ms_motion += milliseconds_since(begin);
   begin = EncodeClock::now();
   predictions_.emplace(content_, p_.base_welded);
@@ -149,7 +151,7 @@ void RateControlDriver::choose_references() {
   if (!settings_.frame_references || !settings_.temporal_residuals) return;
   report_progress(settings_, "rate control: choosing each frame's reference");
   FrameReferences chosen = choose_frame_references(content_, p_.traversal, p_.base_welded, p_.trajectories.positions,
-                                                   largest_reference_window(p_.welded), mean_step_);
+                                                   largest_reference_window(p_.vertex_count), mean_step_);
   if (!chosen.needed) return;
   content_.flags |= format::kFlagFrameReferences | format::kFlagTemporalResiduals;
   content_.reference_window = chosen.window;
@@ -157,9 +159,28 @@ void RateControlDriver::choose_references() {
 }
 
 void RateControlDriver::drop_references() {
-  content_.flags = flags_without_references_;
+  const uint8_t temporal = format::kFlagTemporalResiduals;
+  content_.flags = uint8_t((content_.flags & ~(format::kFlagFrameReferences | temporal)) |
+                           (flags_without_references_ & temporal));
   content_.reference_window = 0;
   content_.references.clear();
+  choose_motion_coding();
+}
+
+// The motion's coding, whichever of version 3's takes fewest bytes: the plain differences, in contexts, or in contexts
+// and predicted linearly (ties to the plainer, which more decoders read).
+void RateControlDriver::choose_motion_coding() {
+  const uint8_t contexts = format::kFlagMotionContexts, linear = format::kFlagLinearMotion;
+  content_.flags &= uint8_t(~(contexts | linear));
+  if (!settings_.motion_contexts) return;
+  size_t best = side_bytes();
+  uint8_t best_flags = content_.flags;
+  for (uint8_t option : {contexts, uint8_t(contexts | linear)}) {
+    content_.flags = uint8_t((content_.flags & ~(contexts | linear)) | option);
+    const size_t bytes = side_bytes();
+    if (bytes < best) best = bytes, best_flags = content_.flags;
+  }
+  content_.flags = best_flags;
 }
 
 // What the current curves promise: with an error target the stream's estimated bytes, with a rate target the
@@ -172,29 +193,33 @@ double RateControlDriver::estimated_cost() {
   return settings_.mode == RateMode::error ? double(side_bytes()) + choice.bits / 8 : choice.distortion;
 }
 
-// Whether the references stay: they do if, at the steps chosen with them, they promise a stream at least
-// kReferenceMinGain smaller than without them (measured at the steps around that choice). An earlier frame that
+// Whether the references stay: they do if they promise a stream at least kReferenceMinGain smaller than without them,
+// both measured at the steps around the ones chosen with them. An earlier frame that
 // predicts a frame better breaks the chain of previous frames, which the motion's deltas and the residual code's
 // contexts follow, and on short or small sequences that can cost more than it saves. Returns with the references
 // dropped when they go.
 bool RateControlDriver::keep_references() {
   const auto begin = EncodeClock::now();
-  const double with = estimated_cost();
+  // Both measured at the same steps: those around the ones chosen with the references.
+  std::vector<double> near[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    const double chosen = curves_[axis].step[choice_.index[axis]];
+    for (int j = -1; j <= 1; ++j) near[axis].push_back(chosen * std::exp2(j / 4.0));
+  }
+  auto cost_near = [&] {
+    for (SubbandCurve& curve : curves_) curve = SubbandCurve();
+    extend(near);
+    return estimated_cost();
+  };
   const uint8_t kept_flags = content_.flags;
   const uint32_t kept_window = content_.reference_window;
   std::vector<uint32_t> kept_references = content_.references;
   const SubbandCurve with_curves[3] = {curves_[0], curves_[1], curves_[2]};
   const StepChoice with_choice = choice_;
   const double with_budget = residual_budget_;
+  const double with = cost_near();
   drop_references();
-  std::vector<double> near[3];
-  for (int axis = 0; axis < 3; ++axis) {
-    const double chosen = with_curves[axis].step[with_choice.index[axis]];
-    for (int j = -1; j <= 1; ++j) near[axis].push_back(chosen * std::exp2(j / 4.0));
-    curves_[axis] = SubbandCurve();
-  }
-  extend(near);
-  const double without = estimated_cost();
+  const double without = cost_near();
   report_.ms_rate_control += milliseconds_since(begin);
   if (!(with <= kReferenceMinGain * without)) return false;
   content_.flags = kept_flags, content_.reference_window = kept_window;
@@ -247,7 +272,10 @@ void RateControlDriver::choose_motion_step_ratio() {
   const double guess = mean_step_;
   prepare_motion(kMotionStepRatio * guess);
   residual_rate_control(true);
-  if (references_rejected()) return choose_motion_step_ratio();
+  if (references_rejected()) {
+    choose_motion_step_ratio();  // again, without them
+    return;
+  }
   const StepChoice first = choice_;
   double best_ratio = kMotionStepRatio, best_bytes = double(side_bytes()) + choice_.bits / 8;
   SubbandCurve best_curves[3] = {curves_[0], curves_[1], curves_[2]};
@@ -292,7 +320,10 @@ void RateControlDriver::choose_steps() {
     for (int pass = 0; pass < 2; ++pass) {
       prepare_motion(kMotionStepRatio * mean_step_);
       residual_rate_control(true);
-      if (references_rejected()) return choose_steps();
+      if (references_rejected()) {
+        choose_steps();  // again, without them
+        return;
+      }
       mean_step_ = (content_.residual_step[0] + content_.residual_step[1] + content_.residual_step[2]) / 3.0;
     }
   } else {

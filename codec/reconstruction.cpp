@@ -139,7 +139,7 @@ double* ResidualReconstructor::slot(size_t in_clip) {
   return frame.data();
 }
 
-const double* ResidualReconstructor::reference(size_t frame, size_t in_clip) {
+const double* ResidualReconstructor::reference(size_t frame, size_t in_clip) const {
   const uint32_t back = frame_reference(content_, frame, in_clip);
   assert(back <= in_clip && back <= history_.size() - 2);
   return back == 0 ? zeros_.data() : history_[(in_clip - back) % history_.size()].data();

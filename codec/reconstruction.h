@@ -76,19 +76,16 @@ class ResidualReconstructor {
   void two_frames(size_t frame, const double* predictions_a, SymbolA symbol_a, OutputA output_a,
                   const double* predictions_b, SymbolB symbol_b, OutputB output_b);
 
-  // Frames of the clip reconstructed since start_clip().
-  size_t frame_in_clip() const { return frame_in_clip_; }
-
  private:
   template <typename F>
   void with_flags(F f) const;
   template <bool kLossless, bool kTemporal, bool kSpatial, typename Symbol, typename Output>
-  void vertex(size_t position, const double* predictions, Symbol& symbol, Output& output, const double* previous,
+  void vertex(size_t position, const double* predictions, Symbol& symbol, Output& output, const double* reference,
               double* current, double* change) const;
   // The residuals of frame `in_clip` of the clip (allocated when first written).
   double* slot(size_t in_clip);
   // The reference residuals of stream frame `frame`, frame `in_clip` of the clip: its reference's, or zeros.
-  const double* reference(size_t frame, size_t in_clip);
+  const double* reference(size_t frame, size_t in_clip) const;
 
   const StreamContent& content_;
   const ResidualTraversal& traversal_;

@@ -29,6 +29,8 @@ struct Models {
   UnsignedModel group_member;          // else: earlier member each member equals, or "new"
   UnsignedModel reference;             // version 3: each frame's reference distance
   std::array<SignedModel, 12> motion;  // per coefficient slot, deltas from the reference (or previous) frame
+  // Version 3 with kFlagMotionContexts, instead: per slot and context (code_motion), what the prediction misses.
+  std::array<std::array<SignedModel, 4>, 12> motion_contexts;
   BitTreeModel extra_count{2};         // extra clusters per vertex (0..3)
   SignedModel weight;
   // The residuals' models are residual_coding.cpp's.
@@ -100,18 +102,21 @@ template <class Coder>
 Status code_references(Coder& coder, Models& models, StreamContent& content) {
   if (!(content.flags & format::kFlagFrameReferences)) return Status::Ok();
   coder.count(models.count, content.reference_window);
-  if (coder.failed() || content.reference_window == 0 || content.reference_window > format::kMaxReferenceDistance)
+  if (coder.failed() || content.reference_window == 0 || content.reference_window > format::kMaxReferenceDistance ||
+      (content.reference_window > 1 &&
+       uint64_t(content.reference_window) * content.vertex_count > format::kMaxReferenceWindowVertices))
     return corrupt("bad reference window");
   size_t frame = 0;
-  for (uint32_t frames : content.clip_frames) {
+  for (uint32_t frames : content.clip_frames)
     for (uint32_t f = 0; f < frames; ++f, ++frame) {
       coder.grow(content.references, frame + 1);
       coder.count(models.reference, content.references[frame]);
       if (content.references[frame] > f || content.references[frame] > content.reference_window)
         return corrupt("a frame's reference is out of range");
+      // Every frame: past the end of the data the decoder reads zeros, which are valid references, and the
+      // references would grow with the frames the counts claim rather than with the data.
+      if (coder.failed()) return coder.status();
     }
-    if (coder.failed()) return coder.status();
-  }
   return Status::Ok();
 }
 
@@ -168,11 +173,15 @@ Status code_labels(Coder& coder, Models& models, StreamContent& content) {
   return Status::Ok();
 }
 
-// The motion: its two steps, then per frame and cluster 12 coefficients, each as its difference from the same
-// coefficient in the frame's reference (version 3, a reference distance d > 0: the frame d back) or else in the
-// previous frame of the stream (across clips; 0 for the first frame). The motion grows a frame at a time as it is
-// read, never sized up front by the counts: a stream of a few bytes can claim kMaxVertexFrames positions
-// (gigabytes), and its data runs out long before memory would.
+// The motion: its two steps, then per frame and cluster 12 coefficients, each as its difference from a prediction:
+// the same coefficient in the frame's reference (version 3, a reference distance d > 0: the frame d back) or else
+// in the previous frame of the stream (across clips; 0 for the first frame). Version 3 may add (spec/bitstream.md,
+// 5.5): with kFlagMotionContexts, each slot's differences in one of four contexts, by the magnitude of the
+// coefficient's last change (between the two frames before; 0, 1, 2 and more) for a frame whose base is the previous
+// frame, 3 for a frame predicted from a reference further back; with kFlagLinearMotion too, a frame whose base is
+// the previous frame, two or more frames into the stream, predicted as that frame's coefficient plus its last change
+// (clamped to ±2^30). The motion grows a frame at a time as it is read, never sized up front by the counts: a stream
+// of a few bytes can claim kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.
 template <class Coder>
 Status code_motion(Coder& coder, Models& models, StreamContent& content) {
   coder.float_bits(content.linear_step);
@@ -183,16 +192,27 @@ Status code_motion(Coder& coder, Models& models, StreamContent& content) {
   const size_t clusters = content.cluster_count, frames = content.frame_count();
   if (uint64_t(frames) * clusters > format::kMaxVertexFrames) return corrupt("too many clusters for its frames");
   const bool references = content.flags & format::kFlagFrameReferences;
+  const bool contexts = content.flags & format::kFlagMotionContexts;
+  const bool linear = contexts && (content.flags & format::kFlagLinearMotion);
+  const size_t row = clusters * 12;
   for (size_t f = 0; f < frames; ++f) {
-    coder.grow(content.motion, (f + 1) * clusters * 12);
+    coder.grow(content.motion, (f + 1) * row);
     const size_t back = references && content.references[f] > 0 ? content.references[f] : 1;
+    const bool changed = contexts && f >= 2 && back == 1;  // the last change is known
     for (size_t k = 0; k < clusters; ++k)
       for (size_t c = 0; c < 12; ++c) {
         const size_t index = (f * clusters + k) * 12 + c;
-        const int32_t previous = f == 0 ? 0 : content.motion[index - back * clusters * 12];
-        int32_t delta = int32_t(int64_t(content.motion[index]) - previous);  // the writer's; the reader's overwritten
-        coder.integer(models.motion[c], delta);
-        const int64_t value = int64_t(previous) + delta;
+        int64_t prediction = f == 0 ? 0 : content.motion[index - back * row];
+        size_t context = back > 1 ? 3 : 0;
+        if (changed) {
+          const int64_t change = prediction - content.motion[index - 2 * row];
+          context = size_t(std::min<int64_t>(change < 0 ? -change : change, 2));
+          if (linear) prediction = std::clamp<int64_t>(prediction + change, -(int64_t(1) << 30), int64_t(1) << 30);
+        }
+        // The writer's difference (its coefficients are within ±2^29: it fits); the reader's is overwritten.
+        int32_t delta = int32_t(int64_t(content.motion[index]) - prediction);
+        coder.integer(contexts ? models.motion_contexts[c][context] : models.motion[c], delta);
+        const int64_t value = prediction + delta;
         if (value < INT32_MIN || value > INT32_MAX) return corrupt("motion coefficient out of range");
         if (Coder::kReading) content.motion[index] = int32_t(value);
       }
@@ -312,7 +332,9 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   const bool table = content.flags & format::kFlagTableResiduals;
   const bool references = content.flags & format::kFlagFrameReferences;
   assert(!references || content.references.size() == content.frame_count());
-  out.push_back(references ? format::kReferenceVersion : table ? format::kTableVersion : format::kVersion);
+  const bool version_3 =
+      content.flags & (format::kFlagFrameReferences | format::kFlagMotionContexts | format::kFlagLinearMotion);
+  out.push_back(version_3 ? format::kReferenceVersion : table ? format::kTableVersion : format::kVersion);
   out.push_back(content.flags);
   const size_t length_at = out.size();
   out.insert(out.end(), 4, 0);  // body length, filled in at the end
@@ -374,13 +396,13 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
                         : version == format::kTableVersion ? format::kKnownTableVersionFlags
                                                            : format::kKnownReferenceVersionFlags;
   if (content.flags & ~known) return Status(StatusCode::bad_data, "animation stream has unknown flags");
-  if (version == format::kReferenceVersion && (content.flags & (format::kFlagFrameReferences |
-                                                                format::kFlagTemporalResiduals)) !=
-                                                  (format::kFlagFrameReferences | format::kFlagTemporalResiduals))
-    return Status(StatusCode::bad_data, "animation stream of version 3 without frame references or temporal residuals");
   const bool table = content.flags & format::kFlagTableResiduals;
   if (table && (content.flags & format::kFlagLossless))
     return Status(StatusCode::bad_data, "animation stream: the table residual code in a lossless stream");
+  if ((content.flags & format::kFlagFrameReferences) && !(content.flags & format::kFlagTemporalResiduals))
+    return Status(StatusCode::bad_data, "animation stream: frame references without temporal residuals");
+  if ((content.flags & format::kFlagLinearMotion) && !(content.flags & format::kFlagMotionContexts))
+    return Status(StatusCode::bad_data, "animation stream: linear motion without motion contexts");
   const uint32_t length =
       uint32_t(data[6]) | uint32_t(data[7]) << 8 | uint32_t(data[8]) << 16 | uint32_t(data[9]) << 24;
   // With the table code the rANS words follow the body: an even number of bytes, at least the states' 8.

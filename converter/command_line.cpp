@@ -23,7 +23,7 @@ const char* const kCommands =
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
     "  encode IN -o OUT [--cache C] [--error E | --bpvf R | --lossless] [--fps N] [--clusters K]\n"
     "         [--position-bits B] [--normal-bits B] [--texcoord-bits B] [--skins keep|bake]\n"
-    "         [--targets auto|keep|bake] [--fast-decode] [--json]\n"
+    "         [--targets auto|keep|bake] [--fast-decode] [--max-stream-version N] [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
     "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
     "      (see --targets); a skinned mesh keeps its skin (see --skins). Meshes that animated nodes move\n"
@@ -148,6 +148,11 @@ const Option kOptions[] = {
      "code the residuals for decoding speed (stream version 2, its table code): about a third less decoding time, "
      "files 1 to 11 % larger on the three classic sequences (docs/codec.md). Not with --lossless",
      [](CommandLine& line, const std::string&, double) { line.encode.fast_decode = true; }},
+    {"--max-stream-version", nullptr, "N", kEncode, Kind::whole, 1, 3, false, nullptr, 0,
+     "write animation streams of at most version N, {range} (default 3), for players whose decoder reads no later "
+     "one: version 3 adds frame references and the motion's contexts, which the encoder uses only where they make "
+     "a stream smaller; --fast-decode needs 2",
+     [](CommandLine& line, const std::string&, double number) { line.encode.max_stream_version = int(number); }},
     {"--clusters", nullptr, "K", kEncode, Kind::whole, 1, 65535, false, nullptr, 0,
      "number of motion clusters, {range}, at most what the segmentation gives a primitive (more is said and coded "
      "with that many; default: automatic)",
@@ -292,6 +297,8 @@ bool check_encode_options(const CommandLine& line, std::string& error) {
     return error = "--targets keep is lossy: it cannot be combined with --lossless", false;
   if (line.encode.fast_decode && line.encode.mode == RateMode::lossless)
     return error = "--fast-decode codes lossy residuals: it cannot be combined with --lossless", false;
+  if (line.encode.fast_decode && line.encode.max_stream_version < 2)
+    return error = "--fast-decode writes stream version 2: it cannot be combined with --max-stream-version 1", false;
   return true;
 }
 

@@ -266,11 +266,16 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
 
 Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinygltf::Model& output,
                       EncodeReport& report, const Progress& progress) {
+  if (settings.max_stream_version < 1 || settings.max_stream_version > 3)
+    return Status(StatusCode::invalid_argument, "the stream version must be 1, 2 or 3");
+  if (settings.fast_decode && settings.max_stream_version < 2)
+    return Status(StatusCode::invalid_argument, "fast decoding writes stream version 2");
   EncodeChoices choices;
   choices.codec.mode = settings.mode;
   choices.codec.target = settings.target;
   choices.codec.clusters = settings.clusters;
   choices.codec.table_residuals = settings.fast_decode;
+  choices.codec.frame_references = choices.codec.motion_contexts = settings.max_stream_version >= 3;
   choices.codec.threads = settings.threads;
   choices.draco.position_bits = settings.position_bits;
   choices.draco.normal_bits = settings.normal_bits;

@@ -4,7 +4,9 @@
 // stream may not hold.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <map>
 #include <string>
 
 #include "frame_decoder.h"
@@ -41,7 +43,7 @@ CodecSettings without_references(CodecSettings settings = CodecSettings()) {
 }
 
 // A cycle played three times: version 3, its two repeats costing less than a fifth of what the first cycle costs
-// alone (without references each costs about as much as the first), the error target met, and the decoder's frames
+// alone (without references they cost most of what the first does), the error target met, and the decoder's frames
 // the encoder's.
 TEST(FrameReferences, ARepeatedCycleIsVersionThreeAndCostsLittleMore) {
   const std::vector<FrameSequence> clips = {cycling_clip(36, 12)};
@@ -51,10 +53,10 @@ TEST(FrameReferences, ARepeatedCycleIsVersionThreeAndCostsLittleMore) {
   ASSERT_GT(with.stream.size(), 5u);
   EXPECT_EQ(with.stream[4], format::kReferenceVersion);
   EXPECT_TRUE(with.stream[5] & format::kFlagFrameReferences);
-  EXPECT_EQ(without.stream[4], format::kVersion);
+  EXPECT_FALSE(without.stream[5] & format::kFlagFrameReferences);
   EXPECT_LT(double(with.stream.size()), 1.2 * double(once.stream.size()))
       << with.stream.size() << " bytes with references, " << once.stream.size() << " for one cycle";
-  EXPECT_GT(double(without.stream.size()), 1.8 * double(once.stream.size()))
+  EXPECT_GT(double(without.stream.size()), 1.6 * double(once.stream.size()))
       << without.stream.size() << " bytes without references, " << once.stream.size() << " for one cycle";
   EXPECT_LE(testing::kg(clips, with.reconstruction), 0.15 * 1.0001);
 
@@ -86,13 +88,12 @@ TEST(FrameReferences, LosslessRepeatsAreSmallerAndExact) {
   EXPECT_EQ(std::memcmp(decoded[0].positions.data(), clips[0].positions.data(), clips[0].positions.size() * 4), 0);
 }
 
-// A motion that never comes back to a pose keeps the implied references: the same bytes as without the setting, in a
-// version 1 stream.
-TEST(FrameReferences, MotionThatDoesNotRepeatStaysVersionOne) {
+// A motion that never comes back to a pose keeps the implied references: the same bytes as without the setting.
+TEST(FrameReferences, MotionThatDoesNotRepeatHasNoReferences) {
   const std::vector<FrameSequence> clips = {testing::bending_clip(20, 1.2, 0.3)};
   const std::vector<float> base = quantized_base(clips[0]);
   const Encoded with = encode(clips, base, CodecSettings()), without = encode(clips, base, without_references());
-  EXPECT_EQ(with.stream[4], format::kVersion);
+  EXPECT_FALSE(with.stream[5] & format::kFlagFrameReferences);
   EXPECT_EQ(with.stream, without.stream);
 }
 
@@ -103,6 +104,14 @@ TEST(FrameReferences, OneOrTwoFramesAtATimeAndAfterASeekAreTheEncodersFrames) {
   const std::vector<float> base = quantized_base(clips[0]);
   const Encoded encoded = encode(clips, base, CodecSettings());
   ASSERT_EQ(encoded.stream[4], format::kReferenceVersion);
+  // The premise: clips longer than the window and two, and a pair of frames decoded together (an even frame of its
+  // clip and the next) whose second references further back than the first frame.
+  StreamContent content;
+  ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+  ASSERT_GT(content.clip_frames[0], content.reference_window + 2);
+  bool far_second = false;
+  for (size_t f = 1; f < content.clip_frames[0]; f += 2) far_second = far_second || content.references[f] >= 2;
+  ASSERT_TRUE(far_second);
   const size_t row = clips[0].vertex_count * 3;
   for (bool two : {false, true}) {
     SCOPED_TRACE(two ? "two at a time" : "one at a time");
@@ -120,7 +129,66 @@ TEST(FrameReferences, OneOrTwoFramesAtATimeAndAfterASeekAreTheEncodersFrames) {
       }
       ASSERT_TRUE(decoder.seek(0).ok());
     }
+    // Straight to the second clip, and back to it from the middle of itself.
+    FrameDecoder fresh;
+    ASSERT_TRUE(fresh.open(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles).ok());
+    ASSERT_TRUE(fresh.seek(1).ok());
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<float> frames;
+      while (fresh.next_clip() == 1 && (pass == 1 || frames.size() < 5 * row))
+        ASSERT_TRUE(fresh.decode_append(two && fresh.frames_left_in_clip() >= 2, frames).ok());
+      const std::vector<float>& want = encoded.reconstruction[1].positions;
+      ASSERT_LE(frames.size(), want.size());
+      EXPECT_TRUE(std::equal(frames.begin(), frames.end(), want.begin())) << "pass " << pass;
+      ASSERT_TRUE(fresh.seek(1).ok());
+    }
   }
+}
+
+// Version 3's motion codings (in contexts; in contexts and predicted linearly) carry the same coefficients as the
+// plain one, read back exactly, and decode to the same frames; the encoder keeps the smallest, which on a smooth
+// bend is not the plain one.
+TEST(FrameReferences, MotionContextsAndLinearMotionCarryTheSameMotion) {
+  const std::vector<FrameSequence> clips = {testing::bending_clip(40, 1.5, 0.2), testing::bending_clip(9, -0.7, 1.0)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  const Encoded encoded = encode(clips, base, CodecSettings());
+  ASSERT_EQ(encoded.stream[4], format::kReferenceVersion);
+  EXPECT_TRUE(encoded.stream[5] & format::kFlagMotionContexts);
+  StreamContent content;
+  ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+  std::map<uint8_t, size_t> sizes;
+  const uint8_t both = format::kFlagMotionContexts | format::kFlagLinearMotion;
+  for (uint8_t option : {uint8_t(0), uint8_t(format::kFlagMotionContexts), both}) {
+    SCOPED_TRACE(int(option));
+    StreamContent changed = content;
+    changed.flags = uint8_t((content.flags & ~both) | option);
+    std::vector<uint8_t> stream;
+    write_stream(changed, base, stream);
+    sizes[option] = stream.size();
+    StreamContent read;
+    ASSERT_TRUE(read_stream(stream.data(), stream.size(), base, read).ok());
+    EXPECT_EQ(read.motion, content.motion);
+    EXPECT_EQ(read.residuals, content.residuals);
+    std::vector<FrameSequence> decoded;
+    ASSERT_TRUE(decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded).ok());
+    for (size_t c = 0; c < clips.size(); ++c) EXPECT_EQ(decoded[c].positions, encoded.reconstruction[c].positions);
+  }
+  EXPECT_EQ(encoded.stream.size(), std::min({sizes[0], sizes[format::kFlagMotionContexts], sizes[both]}));
+  EXPECT_LT(encoded.stream.size(), sizes[0]);
+}
+
+// --max-stream-version below 3 (CodecSettings: neither frame references nor motion contexts) gives the stream of
+// versions 1 and 2 for the same input.
+TEST(FrameReferences, WithoutVersionThreesToolsTheStreamIsVersionOne) {
+  const std::vector<FrameSequence> clips = {cycling_clip(24, 8)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  CodecSettings settings;
+  settings.frame_references = settings.motion_contexts = false;
+  const Encoded encoded = encode(clips, base, settings);
+  EXPECT_EQ(encoded.stream[4], format::kVersion);
+  std::vector<FrameSequence> decoded;
+  ASSERT_TRUE(decode_animation(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles, decoded).ok());
+  EXPECT_EQ(decoded[0].positions, encoded.reconstruction[0].positions);
 }
 
 // The head of a version-3 stream for 3 vertices, one clip of `frames` frames, up to its frame references (what comes
@@ -154,8 +222,8 @@ std::string refusal(const std::vector<uint8_t>& stream) {
 }
 
 // References a stream may not hold are refused as bad data before anything is read or sized by them: a window of
-// 0 or above 255, a reference beyond the frame's index in its clip or beyond the window; version 3 without its flags,
-// and the flag in version 2.
+// 0 or above 255, a reference beyond the frame's index in its clip or beyond the window; references without temporal
+// residuals, and the flag in version 2.
 TEST(FrameReferences, ReferencesAStreamMayNotHoldAreRefused) {
   EXPECT_NE(refusal(head_with_references(4, 0, {})).find("bad reference window"), std::string::npos);
   EXPECT_NE(refusal(head_with_references(4, 256, {})).find("bad reference window"), std::string::npos);
@@ -163,13 +231,36 @@ TEST(FrameReferences, ReferencesAStreamMayNotHoldAreRefused) {
   EXPECT_NE(refusal(head_with_references(4, 2, {0, 1, 1, 3})).find("reference is out of range"), std::string::npos);
   EXPECT_NE(refusal(head_with_references(4, 3, {1})).find("reference is out of range"), std::string::npos);
   EXPECT_NE(refusal(head_with_references(4, 2, {0, 1}, format::kReferenceVersion, format::kFlagFrameReferences))
-                .find("without frame references or temporal residuals"),
-            std::string::npos);
-  EXPECT_NE(refusal(head_with_references(4, 2, {0, 1}, format::kReferenceVersion, format::kFlagTemporalResiduals))
-                .find("without frame references or temporal residuals"),
+                .find("frame references without temporal residuals"),
             std::string::npos);
   EXPECT_NE(refusal(head_with_references(4, 2, {0, 1}, format::kTableVersion)).find("unknown flags"),
             std::string::npos);
+  // A window above 1 times V may not exceed 2^21 (a decoder's memory for the window's residuals).
+  {
+    const std::vector<float> large((size_t(1) << 20) * 3 + 3, 0.0f);  // 2^20 + 1 vertices
+    std::vector<uint8_t> out = {'S', 'G', 'M', 'A', format::kReferenceVersion,
+                                format::kFlagTemporalResiduals | format::kFlagFrameReferences, 0, 0, 0, 0};
+    {
+      RangeEncoder encoder(out);
+      UnsignedModel count;
+      for (uint32_t value : {uint32_t(large.size() / 3), 1u, 4u, 2u}) count.encode(encoder, value);
+      encoder.finish();
+    }
+    const uint32_t length = uint32_t(out.size() - format::kHeaderBytes);
+    for (int i = 0; i < 4; ++i) out[6 + size_t(i)] = uint8_t(length >> (8 * i));
+    StreamContent content;
+    const Status status = read_stream(out.data(), out.size(), large, content);
+    EXPECT_NE(status.message().find("bad reference window"), std::string::npos) << status.message();
+  }
+  // A stream of a few bytes claiming a clip of 89 million frames is refused when its data runs out, not after
+  // reading a reference (a zero, which is valid) for every frame it claims.
+  {
+    const std::vector<uint8_t> stream = head_with_references((1u << 28) / 3, 2, {0});
+    StreamContent content;
+    const Status status = read_stream(stream.data(), stream.size(), {0, 0, 0, 1, 0, 0, 0, 1, 0}, content);
+    EXPECT_EQ(status.code(), StatusCode::bad_data);
+    EXPECT_LT(content.references.size(), 1000u);
+  }
   // The same head with valid references gets past them (and then runs out of data).
   const std::string later = refusal(head_with_references(4, 2, {0, 1, 2, 1}));
   EXPECT_EQ(later.find("reference"), std::string::npos) << later;

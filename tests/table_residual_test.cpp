@@ -87,8 +87,11 @@ std::vector<FrameSequence> with_copies(std::vector<FrameSequence> clips) {
 using testing::Encoded;
 using testing::encode;
 
+// The table code in a version-2 stream: without version 3's frame references and motion contexts, which
+// frame_references_test covers (with the table code too).
 CodecSettings table(CodecSettings settings) {
   settings.table_residuals = true;
+  settings.frame_references = settings.motion_contexts = false;
   return settings;
 }
 
@@ -102,13 +105,6 @@ CodecSettings predictors(CodecSettings settings, bool temporal, bool spatial) {
   settings.temporal_residuals = temporal;
   settings.spatial_residuals = spatial;
   return settings;
-}
-
-// The version byte a stream of the table code (or of the adaptive code: `plain`) has: version 3 when the encoder gave
-// some frame an earlier reference than the previous one (the jumping vertex of animated(…, true) does), else 2 (1).
-uint8_t version_for(const std::vector<uint8_t>& stream, bool plain = false) {
-  if (stream[5] & format::kFlagFrameReferences) return format::kReferenceVersion;
-  return plain ? format::kVersion : format::kTableVersion;
 }
 
 uint32_t body_length(const std::vector<uint8_t>& stream) {
@@ -169,7 +165,7 @@ TEST(TableResiduals, DecodingGivesTheEncodersReconstructionExactly) {
     const std::vector<float> base = quantized_base(c.clips[0]);
     const Encoded encoded = encode(c.clips, base, c.settings);
     ASSERT_GT(encoded.stream.size(), format::kHeaderBytes);
-    EXPECT_EQ(encoded.stream[4], version_for(encoded.stream));
+    EXPECT_EQ(encoded.stream[4], format::kTableVersion);
     EXPECT_TRUE(encoded.stream[5] & format::kFlagTableResiduals);
     flags_seen |= encoded.stream[5];
     flags_missed |= uint8_t(~encoded.stream[5]);
@@ -226,8 +222,11 @@ TEST(TableResiduals, VersionTwoAndTheFlagOnlyWithTheSetting) {
   EXPECT_FALSE(CodecSettings().table_residuals);
   CodecSettings adaptive;
   adaptive.table_residuals = false;
+  adaptive.frame_references = adaptive.motion_contexts = false;
   const Encoded plain = encode(clips, base, adaptive), fast = encode(clips, base, table(CodecSettings()));
-  EXPECT_EQ(plain.stream, encode(clips, base, CodecSettings()).stream);
+  CodecSettings defaults;
+  defaults.frame_references = defaults.motion_contexts = false;
+  EXPECT_EQ(plain.stream, encode(clips, base, defaults).stream);
   EXPECT_EQ(plain.stream[4], format::kVersion);
   EXPECT_FALSE(plain.stream[5] & format::kFlagTableResiduals);
   EXPECT_EQ(fast.stream[4], format::kTableVersion);
@@ -250,9 +249,10 @@ TEST(TableResiduals, LosslessIgnoresTheSetting) {
   const std::vector<float> base = quantized_base(clips[0]);
   CodecSettings lossless;
   lossless.mode = RateMode::lossless;
+  lossless.frame_references = lossless.motion_contexts = false;
   const Encoded encoded = encode(clips, base, table(lossless));
   EXPECT_EQ(encoded.stream, encode(clips, base, lossless).stream);
-  EXPECT_EQ(encoded.stream[4], version_for(encoded.stream, true));
+  EXPECT_EQ(encoded.stream[4], format::kVersion);
   EXPECT_FALSE(encoded.stream[5] & format::kFlagTableResiduals);
   EXPECT_TRUE(encoded.stream[5] & format::kFlagLossless);
   std::vector<FrameSequence> decoded;
@@ -273,7 +273,7 @@ TEST(TableResiduals, RateTargetWithinFivePercent) {
     settings.mode = RateMode::bpvf;
     settings.target = target;
     const Encoded encoded = encode(clips, base, table(settings));
-    EXPECT_EQ(encoded.stream[4], version_for(encoded.stream));
+    EXPECT_EQ(encoded.stream[4], format::kTableVersion);
     EXPECT_NEAR(bits_per_vertex_frame(encoded.stream.size(), clips[0].vertex_count, clips[0].frame_count), target,
                 0.05 * target);
   }
@@ -316,7 +316,7 @@ void expect_residuals_round_trip(const TableStream& s, const std::vector<int64_t
   std::vector<uint8_t> stream;
   write_stream(content, s.base, stream);
   ASSERT_GT(stream.size(), format::kHeaderBytes);
-  EXPECT_EQ(stream[4], version_for(stream));
+  EXPECT_EQ(stream[4], format::kTableVersion);
   EXPECT_TRUE(stream[5] & format::kFlagTableResiduals);
   StreamContent read;
   const Status status = read_stream(stream.data(), stream.size(), s.base, read);
@@ -429,9 +429,15 @@ TEST(TableResidualsHostile, TableFlagOutsideVersionTwoOrInALosslessStreamIsRefus
   EXPECT_EQ(decode_animation(later.data(), later.size(), s.base, s.clips[0].triangles, decoded).code(),
             StatusCode::unsupported);
 
-  // An adaptive stream marked version 2 decodes as it does marked version 1.
-  const Encoded adaptive = encode(s.clips, s.base, error(0.15));
+  // An adaptive stream marked version 2 decodes as it does marked version 1 (and so does one marked version 3).
+  CodecSettings plain = error(0.15);
+  plain.frame_references = plain.motion_contexts = false;
+  const Encoded adaptive = encode(s.clips, s.base, plain);
   ASSERT_EQ(adaptive.stream[4], format::kVersion);
+  std::vector<uint8_t> three = adaptive.stream;
+  three[4] = format::kReferenceVersion;
+  ASSERT_TRUE(decode_animation(three.data(), three.size(), s.base, s.clips[0].triangles, decoded).ok());
+  EXPECT_EQ(decoded[0].positions, adaptive.reconstruction[0].positions);
   std::vector<uint8_t> marked = adaptive.stream;
   marked[4] = format::kTableVersion;
   const Status status = decode_animation(marked.data(), marked.size(), s.base, s.clips[0].triangles, decoded);

@@ -171,6 +171,9 @@ struct EncodeSettings {
   enum class Targets { automatic, keep, bake } targets = Targets::automatic;
   // The residuals in the table code of stream version 2 (or 3): faster decoding, larger files. Lossy encodes only.
   bool fast_decode = false;
+  // The latest animation stream version written, 1 to 3 (SEGMORPH_STREAM_VERSION_MAX): below 3, no frame references
+  // and no motion contexts (the encoder uses them only where they make a stream smaller); fast_decode needs 2.
+  int max_stream_version = 3;
   // Threads for the stages that split their work (the motion fits and refinement, the residual steps' measurement of
   // rate control, the comparison with the input); 0: every hardware thread. The output is the same bytes for every
   // number.
