@@ -77,25 +77,25 @@ struct Seed {
   size_t period = 0;  // with frame references: the clips repeat their frames with this period
 };
 
-// Without frame references unless references(): the seeds of versions 1 and 2 stay of those versions whatever the
-// encoder finds in their frames.
+// Without version 3's tools (frame references, the motion's contexts) unless references() or contexts(): the seeds of
+// versions 1 and 2 stay of those versions whatever the encoder finds in their frames.
 CodecSettings lossy(double error) {
   CodecSettings settings;
   settings.target = error;
-  settings.frame_references = false;
+  settings.frame_references = settings.motion_contexts = false;
   return settings;
 }
 
 CodecSettings lossless() {
   CodecSettings settings;
   settings.mode = RateMode::lossless;
-  settings.frame_references = false;
+  settings.frame_references = settings.motion_contexts = false;
   return settings;
 }
 
 CodecSettings bpvf(double bits) {
   CodecSettings settings;
-  settings.frame_references = false;
+  settings.frame_references = settings.motion_contexts = false;
   settings.mode = RateMode::bpvf;
   settings.target = bits;
   return settings;
@@ -118,9 +118,15 @@ CodecSettings table(CodecSettings settings) {
   return settings;
 }
 
-// Each frame's reference chosen by the encoder (stream version 3).
+// Each frame's reference and the motion's coding chosen by the encoder (stream version 3).
 CodecSettings references(CodecSettings settings) {
-  settings.frame_references = true;
+  settings.frame_references = settings.motion_contexts = true;
+  return settings;
+}
+
+// The motion's coding chosen by the encoder (stream version 3 where contexts or linear prediction pay).
+CodecSettings contexts(CodecSettings settings) {
+  settings.motion_contexts = true;
   return settings;
 }
 
@@ -158,6 +164,8 @@ std::vector<Seed> seeds() {
       {"references_bpvf_4", references(bpvf(4)), {10}, 5},
       {"references_lossless", references(lossless()), {8, 6}, 3},
       {"references_table", table(references(lossy(0.15))), {12}, 4},
+      {"motion_contexts_error_0.15", contexts(lossy(0.15)), {24}},
+      {"motion_contexts_lossless_two_clips", contexts(lossless()), {16, 9}},
   };
 }
 
@@ -183,7 +191,8 @@ int main(int argc, char** argv) {
     std::vector<uint8_t> stream;
     std::vector<FrameSequence> reconstruction, decoded;
     Status status = encode_animation(clips, mesh.positions, seed.settings, stream, nullptr, &reconstruction);
-    const int version = seed.settings.frame_references ? 3 : seed.settings.table_residuals ? 2 : 1;
+    const int version =
+        seed.settings.frame_references || seed.settings.motion_contexts ? 3 : seed.settings.table_residuals ? 2 : 1;
     if (status.ok() && (stream.size() < 5 || stream[4] != version))
       status = Status(StatusCode::internal, "not a version-" + std::to_string(version) + " stream");
     if (status.ok()) status = decode_animation(stream.data(), stream.size(), mesh.positions, mesh.triangles, decoded);
