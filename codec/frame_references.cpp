@@ -15,8 +15,9 @@ constexpr double kReferenceGain = 0.5;
 // The references are proposed only when, on the whole sequence, they leave at most this share of the estimated
 // bits: the rate control then measures whether they pay, which costs a second step search when they do not.
 constexpr double kPromisingShare = 0.9;
-// Sampled positions: the score of every candidate distance on kCoarseSample of them, then of the best
-// kFinalists and the previous frame on kSample (with their earlier neighbours, for the spatial prediction).
+// Sampled positions: the squared difference of every candidate distance on kCoarseSample of them, then the score
+// of the best kFinalists and of the implied reference on kSample (with their earlier neighbours, for the spatial
+// prediction).
 constexpr size_t kCoarseSample = 256;
 constexpr size_t kSample = 512;
 constexpr size_t kFinalists = 2;
@@ -122,9 +123,9 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
   size_t frame = 0;
   for (uint32_t frames : content.clip_frames)
     for (uint32_t f = 0; f < frames; ++f, ++frame) {
-      fill(frame);
-      const size_t implied = temporal && f > 0 ? 1 : 0;  // versions 1 and 2
+      fill(frame);  // every frame, the clip's first too: later frames may reference it
       if (f == 0) continue;
+      const size_t implied = temporal ? 1 : 0;  // versions 1 and 2
       const size_t window = std::min<size_t>(max_window, f);
       std::vector<std::pair<double, size_t>> coarse;
       // Without temporal residuals (the cluster search measured that the previous frame does not pay), only the frames
