@@ -68,9 +68,8 @@ class CandidateCost {
   double operator()(const Clusters& merged, uint8_t flags) const {
     const EncodeProblem& p = problem_;
     report_progress(p.settings, "cluster count: trying " + std::to_string(merged.count) + " clusters");
-    const Clusters candidate =
-        refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency, kSampleRefinements, nullptr,
-                         p.settings.threads);
+    const Clusters candidate = refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency,
+                                                kSampleRefinements, nullptr, p.settings.threads);
     StreamContent trial = content_;
     trial.flags = flags;
     trial.clip_frames = sample_.clip_frames;
@@ -149,20 +148,33 @@ Clusters automatic_count(const EncodeProblem& problem, const Clusters& morse, co
 
 }  // namespace
 
-Clusters choose_clusters(const EncodeProblem& problem, const Clusters& morse, StreamContent& content) {
+Clusters choose_clusters(const EncodeProblem& problem, const std::vector<Clusters>& segmentations,
+                         StreamContent& content, size_t* chosen) {
   const CodecSettings& settings = problem.settings;
+  auto merged = [&](const Clusters& morse, size_t k) {
+    return merge_clusters(morse, k, problem.base_welded.data(), problem.trajectories, problem.adjacency);
+  };
+  if (chosen) *chosen = segmentations.size() - 1;
   if (settings.mode == RateMode::lossless)
-    return merge_clusters(morse, settings.clusters ? settings.clusters : kLosslessClusters, problem.base_welded.data(),
-                          problem.trajectories, problem.adjacency);
+    return merged(segmentations.back(), settings.clusters ? settings.clusters : kLosslessClusters);
   const CandidateCost cost_of(problem, content);
-  double best_cost;
+  double best_cost = 0;
   Clusters clusters;
-  if (settings.clusters) {
-    clusters = merge_clusters(morse, settings.clusters, problem.base_welded.data(), problem.trajectories,
-                              problem.adjacency);
-    best_cost = cost_of(clusters, content.flags);
-  } else {
-    clusters = automatic_count(problem, morse, cost_of, content.flags, best_cost);
+  // The last (refined) segmentation first: an earlier one replaces it only when estimated strictly cheaper (a tie, or
+  // a cost that is not a number on a mesh of a few vertices, keeps the refined one).
+  for (size_t s = segmentations.size(); s-- > 0;) {
+    double cost;
+    Clusters candidate;
+    if (settings.clusters) {
+      candidate = merged(segmentations[s], settings.clusters);
+      cost = cost_of(candidate, content.flags);
+    } else {
+      candidate = automatic_count(problem, segmentations[s], cost_of, content.flags, cost);
+    }
+    if (s + 1 == segmentations.size() || cost < best_cost) {
+      best_cost = cost, clusters = std::move(candidate);
+      if (chosen) *chosen = s;
+    }
   }
   // Temporal and spatial residual prediction (when allowed) are kept when the estimate says they pay: temporal does
   // for slow sequences, not always for fast ones; spatial does at higher rates, not always at low ones, where most

@@ -24,11 +24,15 @@ struct CodecSettings {
   double target = 0.15;  // KG % (error) or bits per vertex per frame (bpvf)
   size_t clusters = 0;   // K; 0 chooses automatically
   // Stages of the paper that can be switched off, and additions beyond it (measured in docs/codec.md).
-  bool curvature_refinement = true;  // Eq. 6
-  bool motion_refinement = true;     // beyond the paper: boundary vertices follow the best-fitting motion
-  bool blend_weights = true;         // Eq. 3; off: each vertex follows its own cluster only
-  bool temporal_residuals = true;    // beyond the paper: residuals predicted from the previous (or reference) frame's
-  bool spatial_residuals = true;     // beyond the paper: ... and from already decoded neighbours'
+  // Eq. 6. The refined segmentation is coded where the cluster count's estimate finds it smaller than the Morse
+  // segmentation as found (automatic_clusters.h); refinement_level_curves scores the levels on ordered level curves
+  // as the paper states it, else on boundary vertices (refinement.h; measured in docs/codec.md).
+  bool curvature_refinement = true;
+  bool refinement_level_curves = false;
+  bool motion_refinement = true;   // beyond the paper: boundary vertices follow the best-fitting motion
+  bool blend_weights = true;       // Eq. 3; off: each vertex follows its own cluster only
+  bool temporal_residuals = true;  // beyond the paper: residuals predicted from the previous (or reference) frame's
+  bool spatial_residuals = true;   // beyond the paper: ... and from already decoded neighbours'
   // Beyond the paper: a frame's motion and residuals predicted from an earlier frame than the previous one where it
   // predicts much better (stream version 3; frame_references.h). With temporal residuals only.
   bool frame_references = true;

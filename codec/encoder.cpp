@@ -9,11 +9,11 @@
 #include "codec.h"
 #include "curvature.h"
 #include "diffusion.h"
+#include "encode_problem.h"
 #include "laplacian.h"
 #include "metrics.h"
-#include "encode_problem.h"
-#include "rate_control_driver.h"
 #include "rate_control.h"
+#include "rate_control_driver.h"
 #include "reconstruction.h"
 #include "refinement.h"
 #include "segmentation.h"
@@ -99,8 +99,8 @@ Status set_up(EncodeProblem& p, StreamContent& content) {
 }
 
 // The Morse segmentation of the first frame as sampled (diffusion, Morse function, levels), its E(Π), and the
-// concavity refinement of its levels (Eq. 6).
-Status segment(const EncodeProblem& p, Clusters& clusters, StreamReport& report) {
+// concavity refinement of its levels (Eq. 6): `segmentations` receives the Morse clusters, then the refined ones.
+Status segment(const EncodeProblem& p, std::vector<Clusters>& segmentations, StreamReport& report) {
   const std::vector<double> positions = welded_positions(p.clips[0].frame(0), p.topology);
   report_progress(p.settings, "segmentation: heat diffusion (" + std::to_string(p.welded) + " vertices)");
   DiffusionSettings diffusion;
@@ -110,15 +110,19 @@ Status segment(const EncodeProblem& p, Clusters& clusters, StreamReport& report)
   MorseBands bands;
   const MorseSettings morse_settings;
   report_progress(p.settings, "segmentation: Morse levels");
-  clusters = morse_segmentation(morse.mu, p.topology, p.adjacency, morse_settings, &bands);
-  report.e_pi_morse = motion_compensation_error(p.base_welded.data(), p.trajectories, clusters,
-                                                fit_affine_motion(p.base_welded.data(), p.trajectories, clusters,
-                                                                  p.settings.threads));
+  segmentations.assign(1, morse_segmentation(morse.mu, p.topology, p.adjacency, morse_settings, &bands));
+  report.e_pi_morse = motion_compensation_error(
+      p.base_welded.data(), p.trajectories, segmentations[0],
+      fit_affine_motion(p.base_welded.data(), p.trajectories, segmentations[0], p.settings.threads));
   if (p.settings.curvature_refinement) {
     report_progress(p.settings, "segmentation: concavity refinement");
-    const MorseBands refined = refine_levels(morse.mu, minimum_curvature(positions, p.topology), p.topology,
-                                             p.adjacency, bands, RefinementSettings(), &report.curvature_refinement_passes);
-    clusters = clusters_from_levels(morse.mu, p.topology, p.adjacency, refined, morse_settings);
+    RefinementSettings refinement;
+    if (p.settings.refinement_level_curves) refinement.profile = ConcavityProfile::level_curves;
+    const MorseBands refined = refine_levels(positions, morse.mu, minimum_curvature(positions, p.topology), p.topology,
+                                             p.adjacency, bands, refinement, &report.curvature_refinement_passes);
+    Clusters clusters = clusters_from_levels(morse.mu, p.topology, p.adjacency, refined, morse_settings);
+    // Levels the refinement left where they were give the same clusters: nothing to choose between.
+    if (clusters.label != segmentations[0].label) segmentations.push_back(std::move(clusters));
   }
   return Status::Ok();
 }
@@ -127,7 +131,8 @@ Status segment(const EncodeProblem& p, Clusters& clusters, StreamReport& report)
 // finest step any lossy quantizer may take.
 void set_scales(EncodeProblem& p, double e_pi_morse) {
   p.spread = frame_spread(p.clips);
-  p.mean_step = std::sqrt(12.0 * std::max(e_pi_morse, 1e-12)) * bounding_box_diagonal(p.base.data(), p.vertex_count) * 0.1;
+  p.mean_step =
+      std::sqrt(12.0 * std::max(e_pi_morse, 1e-12)) * bounding_box_diagonal(p.base.data(), p.vertex_count) * 0.1;
   if (p.settings.mode == RateMode::error) p.mean_step = expected_residual_step(p.clips, p.spread, p.settings.target);
   double extent = bounding_box_diagonal(p.base.data(), p.vertex_count);
   for (const FrameSequence& clip : p.clips)
@@ -164,10 +169,12 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
 
   // Segmentation, refinement, cluster count (and the residual predictions that pay).
   const auto start = EncodeClock::now();
-  Clusters clusters;
-  SEGMORPH_RETURN_IF_ERROR(segment(problem, clusters, report));
+  std::vector<Clusters> segmentations;
+  SEGMORPH_RETURN_IF_ERROR(segment(problem, segmentations, report));
   set_scales(problem, report.e_pi_morse);
-  clusters = choose_clusters(problem, clusters, content);
+  size_t chosen = 0;
+  Clusters clusters = choose_clusters(problem, segmentations, content, &chosen);
+  report.curvature_refined = chosen == 1;
   if (settings.motion_refinement) {
     report_progress(settings, "motion refinement");
     clusters = refine_by_motion(clusters, problem.base_welded.data(), problem.trajectories, problem.adjacency, 8,

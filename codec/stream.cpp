@@ -330,7 +330,7 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   const size_t start = out.size();
   out.insert(out.end(), std::begin(format::kMagic), std::end(format::kMagic));
   const bool table = content.flags & format::kFlagTableResiduals;
-  const bool references = content.flags & format::kFlagFrameReferences;
+  [[maybe_unused]] const bool references = content.flags & format::kFlagFrameReferences;
   assert(!references || content.references.size() == content.frame_count());
   const bool version_3 =
       content.flags & (format::kFlagFrameReferences | format::kFlagMotionContexts | format::kFlagLinearMotion);

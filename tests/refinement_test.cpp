@@ -34,34 +34,70 @@ TEST(Curvature, CylinderHasZeroMinimumCurvatureAndAValleyIsNegative) {
   }
 }
 
+// Both concavity scores (refinement.h), each test run once per score.
+const ConcavityProfile kProfiles[] = {ConcavityProfile::boundary_vertices, ConcavityProfile::level_curves};
+
 TEST(Refinement, LevelMovesTowardsAConcaveCrease) {
   // μ = x with one band level at x = 10; the surface is a smooth valley z = sqrt(1 + (x − 12.5)²), most
   // concave at x = 12.5. The refined level's boundary (the first column with μ >= level) must be column 12
-  // or 13, nearer the valley than column 10.
+  // or 13, nearer the valley than column 10. The level set is one open curve across the grid.
   const FrameSequence valley = height_field(30, [](int i, int) { return std::sqrt(1 + (i - 12.5) * (i - 12.5)); });
   const WeldedTopology topology = weld_topology({valley});
   const VertexAdjacency adjacency = vertex_adjacency(topology);
   const std::vector<double> positions = welded_positions(valley.frame(0), topology);
+  const std::vector<double> curvature = minimum_curvature(positions, topology);
   std::vector<double> mu;
   for (size_t w = 0; w < topology.welded_count(); ++w) mu.push_back(positions[w * 3]);
   MorseBands bands;
   bands.levels = {{10.0}};
-  int iterations = 0;
-  const MorseBands refined = refine_levels(mu, minimum_curvature(positions, topology), topology, adjacency, bands,
-                                           RefinementSettings(), &iterations);
-  ASSERT_EQ(refined.levels[0].size(), 1u);
-  const double column = std::ceil(refined.levels[0][0]);
-  EXPECT_GE(column, 12.0);
-  EXPECT_LE(column, 13.0);
-  // It moved, then settled: a pass that moved the level and one that found nothing better, within the pass limit.
-  EXPECT_GE(iterations, 2);
-  EXPECT_LT(iterations, RefinementSettings().max_iterations);
-  // Settled means a fixed point: refined again, the level stays, after one pass.
-  int again = 0;
-  const MorseBands twice = refine_levels(mu, minimum_curvature(positions, topology), topology, adjacency, refined,
-                                         RefinementSettings(), &again);
-  EXPECT_EQ(twice.levels[0], refined.levels[0]);
-  EXPECT_EQ(again, 1);
+  for (ConcavityProfile profile : kProfiles) {
+    SCOPED_TRACE(int(profile));
+    RefinementSettings settings;
+    settings.profile = profile;
+    int iterations = 0;
+    const MorseBands refined =
+        refine_levels(positions, mu, curvature, topology, adjacency, bands, settings, &iterations);
+    ASSERT_EQ(refined.levels[0].size(), 1u);
+    const double column = std::ceil(refined.levels[0][0]);
+    EXPECT_GE(column, 12.0);
+    EXPECT_LE(column, 13.0);
+    // It moved, then settled: a pass that moved the level and one that found nothing better, within the pass limit.
+    EXPECT_GE(iterations, 2);
+    EXPECT_LT(iterations, settings.max_iterations);
+    // Settled means a fixed point: refined again, the level stays, after one pass.
+    int again = 0;
+    const MorseBands twice = refine_levels(positions, mu, curvature, topology, adjacency, refined, settings, &again);
+    EXPECT_EQ(twice.levels[0], refined.levels[0]);
+    EXPECT_EQ(again, 1);
+  }
+}
+
+TEST(Refinement, LevelMovesToTheWaistOfAClosedSurface) {
+  // A sphere stretched to x in [−3, 3] and pinched at x = 0.8 (its radius there halved, a smooth waist): the level
+  // sets of μ = x are closed loops around it, and the one at x = 0 must move to the waist, where the surface is most
+  // concave along the loop.
+  FrameSequence shape = testing::stretched_sphere(4, 3.0);
+  for (size_t v = 0; v < shape.vertex_count; ++v) {
+    const double x = shape.positions[v * 3];
+    const double pinch = 1 - 0.5 * std::exp(-(x - 0.8) * (x - 0.8) / (2 * 0.3 * 0.3));
+    shape.positions[v * 3 + 1] = float(shape.positions[v * 3 + 1] * pinch);
+    shape.positions[v * 3 + 2] = float(shape.positions[v * 3 + 2] * pinch);
+  }
+  const WeldedTopology topology = weld_topology({shape});
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  const std::vector<double> positions = welded_positions(shape.frame(0), topology);
+  const std::vector<double> curvature = minimum_curvature(positions, topology);
+  std::vector<double> mu;
+  for (size_t w = 0; w < topology.welded_count(); ++w) mu.push_back(positions[w * 3]);
+  MorseBands bands;
+  bands.levels = {{0.0}};
+  for (ConcavityProfile profile : kProfiles) {
+    SCOPED_TRACE(int(profile));
+    RefinementSettings settings;
+    settings.profile = profile;
+    const MorseBands refined = refine_levels(positions, mu, curvature, topology, adjacency, bands, settings);
+    EXPECT_NEAR(refined.levels[0][0], 0.8, 0.2);
+  }
 }
 
 TEST(Refinement, MotionRefinementMovesMislabelledVerticesHome) {
@@ -84,8 +120,8 @@ TEST(Refinement, MotionRefinementMovesMislabelledVerticesHome) {
     for (size_t v = 0; v < vertex_count; ++v) {
       const double angle = (truth.label[v] ? 0.3 : -0.2) * f;
       const double x = grid.positions[v * 3] - 10, y = grid.positions[v * 3 + 1];
-      frames.positions.insert(frames.positions.end(), {float(x * std::cos(angle) + 10), float(y),
-                                                       float(x * std::sin(angle))});
+      frames.positions.insert(frames.positions.end(),
+                              {float(x * std::cos(angle) + 10), float(y), float(x * std::sin(angle))});
     }
   const float* base = frames.frame(0);
   const double before = motion_compensation_error(base, frames, initial, fit_affine_motion(base, frames, initial));
