@@ -132,7 +132,7 @@ Status compress_model(tinygltf::Model& model, const std::vector<const SampledNod
       SEGMORPH_RETURN_IF_ERROR(
           read_base_mesh(model, primitive, frames.clips[0].triangles, frames.clips[0].vertex_count, what, base));
       if (encoding.draco.position_bits == 0)
-        encoding.draco.position_bits = automatic_position_bits(base.attributes[0].values, frames.clips, settings);
+        encoding.draco.position_bits = automatic_position_bits(base.attributes[0].values, frames.clips, settings, true);
       SEGMORPH_RETURN_IF_ERROR(encode_base(base, frames.clips, encoding, report.ms_draco));
 
       // The animation, against the base positions the decoder will have.

@@ -75,7 +75,7 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
     BaseMesh base;
     SEGMORPH_RETURN_IF_ERROR(read_base_mesh(model, primitive, first.triangles, first.vertex_count, what, base));
     if (encoding.draco.position_bits == 0)
-      encoding.draco.position_bits = automatic_position_bits(base.attributes[0].values, {targets}, settings);
+      encoding.draco.position_bits = automatic_position_bits(base.attributes[0].values, {targets}, settings, false);
     SEGMORPH_RETURN_IF_ERROR(encode_base(base, {targets}, encoding, report.ms_draco));
     const std::vector<FrameSequence> reordered_targets = in_decoded_order({targets}, encoding);
     const std::vector<FrameSequence> reordered = in_decoded_order(sampled.clips, encoding);

@@ -12,27 +12,31 @@ namespace segmorph {
 namespace {
 
 // Draco position bits when none are given: the base mesh's quantization step (its largest extent over 2^bits)
-// about kBaseStepRatio times the residual step the error target implies, and at least kMinPositionBits. The
-// animation's closed loop corrects the base mesh's error in every frame, so the base need not be much finer
-// than the residuals, while a coarser base costs residual bits in every frame: measured on the three
-// sequences at KG 0.5, 0.15 and 0.03 % (docs/codec.md), the best whole file is within a bit of this choice.
-// Rate targets and lossless streams keep Draco's usual 14 bits.
-constexpr int kMinPositionBits = 12, kMaxPositionBits = 24, kDefaultPositionBits = 14;
-constexpr double kBaseStepRatio = 0.25;
+// about kBaseStepRatio times the residual step the error target implies; for an animation stream of F frames,
+// times sqrt(kBaseStepFrames / F); at least kMinPositionBits. The animation's closed loop corrects the base
+// mesh's error, so the base need not be much finer than the residuals, while a coarser base costs residual bits (or
+// error) in every frame: the base's share of the error pays for its bytes once, its cost in the animation grows with
+// F. Measured (docs/codec.md, "The base mesh's precision"): on the three sequences at KG 0.5 and 0.15 % the choice is
+// the best whole file or within 0.6 % of it (after brotli); below about 2 bits coarser than the best the animation's bytes
+// climb steeply. Rate targets and lossless streams keep Draco's usual 14 bits.
+constexpr int kMinPositionBits = 10, kMaxPositionBits = 24, kDefaultPositionBits = 14;
+constexpr double kBaseStepRatio = 0.25, kBaseStepFrames = 48;
 }  // namespace
 
 int automatic_position_bits(const std::vector<float>& positions, const std::vector<FrameSequence>& clips,
-                            const CodecSettings& settings) {
+                            const CodecSettings& settings, bool animation_stream) {
   if (settings.mode != RateMode::error || positions.empty()) return kDefaultPositionBits;
   float low[3], high[3];
   bounding_box(positions.data(), positions.size() / 3, low, high);
   const double extent = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
-  const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio;
+  size_t frames = 0;
+  for (const FrameSequence& clip : clips) frames += clip.frame_count;
+  const double share = animation_stream ? std::sqrt(kBaseStepFrames / double(std::max<size_t>(frames, 1))) : 1.0;
+  const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio * share;
   if (!(extent > 0) || !(step > 0)) return kDefaultPositionBits;
   const double bits = std::round(std::log2(extent / step + 1));
   return int(std::clamp(bits, double(kMinPositionBits), double(kMaxPositionBits)));
 }
-
 
 // Reads every attribute of `primitive` (POSITION first) and its triangles into a base mesh.
 Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& primitive,

@@ -27,9 +27,11 @@ struct PrimitiveEncoding {
   std::vector<FrameSequence> reconstruction;  // what the stream decodes to, in the decoded vertex order
 };
 
-// Draco position bits when none are given (the rule at kBaseStepRatio in primitive_encoding.cpp).
+// Draco position bits when none are given (the rule at kBaseStepRatio in primitive_encoding.cpp). animation_stream:
+// the clips are the frames an animation stream codes against the base (its precision weighed against its error in
+// each of them); false for kept targets (clips: the targets).
 int automatic_position_bits(const std::vector<float>& positions, const std::vector<FrameSequence>& clips,
-                            const CodecSettings& settings);
+                            const CodecSettings& settings, bool animation_stream);
 
 // Reads every attribute of `primitive` (POSITION first) and its triangles into a base mesh.
 Status read_base_mesh(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
