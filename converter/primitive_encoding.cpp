@@ -12,14 +12,17 @@ namespace segmorph {
 namespace {
 
 // Draco position bits when none are given: the base mesh's quantization step (its largest extent over 2^bits)
-// about kBaseStepRatio times the residual step the error target implies; for an animation stream of F frames,
-// times sqrt(kBaseStepFrames / F); at least kMinPositionBits. The animation's closed loop corrects the base
-// mesh's error, so the base need not be much finer than the residuals, while a coarser base costs residual bits (or
-// error) in every frame: the base's share of the error pays for its bytes once, its cost in the animation grows with
-// F. Measured (docs/codec.md, "The base mesh's precision"): on the three sequences at KG 0.5 and 0.15 % the choice is
-// the best whole file or within 0.6 % of it (after brotli); below about 2 bits coarser than the best the animation's bytes
-// climb steeply. Rate targets and lossless streams keep Draco's usual 14 bits.
-constexpr int kMinPositionBits = 10, kMaxPositionBits = 24, kDefaultPositionBits = 14;
+// about kBaseStepRatio times the residual step the error target implies; for an animation stream of F frames, F
+// below kBaseStepFrames, times sqrt(kBaseStepFrames / F); at least kMinPositionBits. The animation's closed loop
+// corrects the base mesh's error, so the base need not be much finer than the residuals, while a coarser base costs
+// residual bits (or error) in every frame: the base's share of the error pays for its bytes once, its cost in the
+// animation grows with F, so a short sequence takes a coarser base. (Finer for long ones measured better on the
+// cow, but 13 % larger on the scaling torus at 100k vertices x 300 frames, whose rate control then lands far below
+// its error target: docs/codec.md, "The base mesh's precision".) Measured on the three sequences at KG 0.5 and
+// 0.15 %: the best whole file or within 0.5 % of it, except the horse at 0.5 % (11 bits, 3.8 % above 10); below
+// about 2 bits coarser than the best the animation's bytes climb steeply. Rate targets and lossless streams keep
+// Draco's usual 14 bits.
+constexpr int kMinPositionBits = 11, kMaxPositionBits = 24, kDefaultPositionBits = 14;
 constexpr double kBaseStepRatio = 0.25, kBaseStepFrames = 48;
 }  // namespace
 
@@ -31,8 +34,9 @@ int automatic_position_bits(const std::vector<float>& positions, const std::vect
   const double extent = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
   size_t frames = 0;
   for (const FrameSequence& clip : clips) frames += clip.frame_count;
-  const double share = animation_stream ? std::sqrt(kBaseStepFrames / double(std::max<size_t>(frames, 1))) : 1.0;
-  const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio * share;
+  const double coarser =
+      animation_stream ? std::max(1.0, std::sqrt(kBaseStepFrames / double(std::max<size_t>(frames, 1)))) : 1.0;
+  const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio * coarser;
   if (!(extent > 0) || !(step > 0)) return kDefaultPositionBits;
   const double bits = std::round(std::log2(extent / step + 1));
   return int(std::clamp(bits, double(kMinPositionBits), double(kMaxPositionBits)));
