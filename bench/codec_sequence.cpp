@@ -3,7 +3,8 @@
 // box, as Draco's default position quantization would), decoded, and checked.
 //   codec_sequence FILE [--error E | --bpvf R | --lossless] [--clusters K] [--no-temporal] [--no-blend]
 //                       [--no-spatial] [--no-frame-references] [--no-curvature-refinement]
-//                       [--level-curve-refinement] [--no-motion-refinement] [--fast-decode]
+//                       [--level-curve-refinement] [--choose-segmentation] [--no-motion-refinement]
+//                       [--fast-decode]
 // Prints one line: clusters, E(Π) before and after refinement, stream bytes (motion / residuals), bits per
 // vertex per frame of the stream alone, KG error and RMSE of the decoded frames, encoder and decoder
 // milliseconds, and whether the decoder reproduced the encoder's reconstruction exactly.
@@ -50,6 +51,8 @@ int main(int argc, char** argv) {
       settings.curvature_refinement = false;
     else if (arg == "--level-curve-refinement")
       settings.refinement_level_curves = true;
+    else if (arg == "--choose-segmentation")
+      settings.choose_segmentation = true;
     else if (arg == "--no-motion-refinement")
       settings.motion_refinement = false;
     else if (arg == "--fast-decode")

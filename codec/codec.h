@@ -24,11 +24,13 @@ struct CodecSettings {
   double target = 0.15;  // KG % (error) or bits per vertex per frame (bpvf)
   size_t clusters = 0;   // K; 0 chooses automatically
   // Stages of the paper that can be switched off, and additions beyond it (measured in docs/codec.md).
-  // Eq. 6. The refined segmentation is coded where the cluster count's estimate finds it smaller than the Morse
-  // segmentation as found (automatic_clusters.h); refinement_level_curves scores the levels on ordered level curves
-  // as the paper states it, else on boundary vertices (refinement.h; measured in docs/codec.md).
+  // Eq. 6 (refinement.h; measured in docs/codec.md): refinement_level_curves scores the levels on ordered level
+  // curves as the paper states it, else on boundary vertices. choose_segmentation: the cluster count's search is
+  // run on the Morse segmentation as found too, and the one estimated cheaper is coded (automatic_clusters.h);
+  // off by default: it costs 1.2x the encode time and changed few whole files.
   bool curvature_refinement = true;
   bool refinement_level_curves = false;
+  bool choose_segmentation = false;
   bool motion_refinement = true;   // beyond the paper: boundary vertices follow the best-fitting motion
   bool blend_weights = true;       // Eq. 3; off: each vertex follows its own cluster only
   bool temporal_residuals = true;  // beyond the paper: residuals predicted from the previous (or reference) frame's

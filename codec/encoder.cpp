@@ -99,7 +99,8 @@ Status set_up(EncodeProblem& p, StreamContent& content) {
 }
 
 // The Morse segmentation of the first frame as sampled (diffusion, Morse function, levels), its E(Π), and the
-// concavity refinement of its levels (Eq. 6): `segmentations` receives the Morse clusters, then the refined ones.
+// concavity refinement of its levels (Eq. 6): `segmentations` receives the refined clusters, or with
+// settings.choose_segmentation the Morse clusters and then the refined ones (when they differ).
 Status segment(const EncodeProblem& p, std::vector<Clusters>& segmentations, StreamReport& report) {
   const std::vector<double> positions = welded_positions(p.clips[0].frame(0), p.topology);
   report_progress(p.settings, "segmentation: heat diffusion (" + std::to_string(p.welded) + " vertices)");
@@ -121,8 +122,11 @@ Status segment(const EncodeProblem& p, std::vector<Clusters>& segmentations, Str
     const MorseBands refined = refine_levels(positions, morse.mu, minimum_curvature(positions, p.topology), p.topology,
                                              p.adjacency, bands, refinement, &report.curvature_refinement_passes);
     Clusters clusters = clusters_from_levels(morse.mu, p.topology, p.adjacency, refined, morse_settings);
-    // Levels the refinement left where they were give the same clusters: nothing to choose between.
-    if (clusters.label != segmentations[0].label) segmentations.push_back(std::move(clusters));
+    if (!p.settings.choose_segmentation)
+      segmentations.assign(1, std::move(clusters));
+    else if (clusters.label != segmentations[0].label)  // levels left where they were: nothing to choose between
+      segmentations.push_back(std::move(clusters));
+    report.curvature_refined = true;
   }
   return Status::Ok();
 }
@@ -174,7 +178,8 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   set_scales(problem, report.e_pi_morse);
   size_t chosen = 0;
   Clusters clusters = choose_clusters(problem, segmentations, content, &chosen);
-  report.curvature_refined = chosen == 1;
+  // The refined clusters are the last segmentation, when there is one.
+  report.curvature_refined = report.curvature_refined && chosen + 1 == segmentations.size();
   if (settings.motion_refinement) {
     report_progress(settings, "motion refinement");
     clusters = refine_by_motion(clusters, problem.base_welded.data(), problem.trajectories, problem.adjacency, 8,

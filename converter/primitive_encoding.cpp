@@ -13,8 +13,9 @@ namespace {
 
 // Draco position bits when none are given: the base mesh's quantization step (its largest extent over 2^bits)
 // about kBaseStepRatio times the residual step the error target implies; for an animation stream of F frames, F
-// below kBaseStepFrames, times sqrt(kBaseStepFrames / F); at least kMinPositionBits. The animation's closed loop
-// corrects the base mesh's error, so the base need not be much finer than the residuals, while a coarser base costs
+// below kBaseStepFrames, times sqrt(kBaseStepFrames / F); at least kMinPositionBits (kMinKeptTargetBits for kept
+// targets: 11 bits measured +0.2 to +0.4 % on AnimatedMorphSphere). The animation's closed loop corrects the base
+// mesh's error, so the base need not be much finer than the residuals, while a coarser base costs
 // residual bits (or error) in every frame: the base's share of the error pays for its bytes once, its cost in the
 // animation grows with F, so a short sequence takes a coarser base. (Finer for long ones measured better on the
 // cow, but 13 % larger on the scaling torus at 100k vertices x 300 frames, whose rate control then lands far below
@@ -22,7 +23,7 @@ namespace {
 // 0.15 %: the best whole file or within 0.5 % of it, except the horse at 0.5 % (11 bits, 3.8 % above 10); below
 // about 2 bits coarser than the best the animation's bytes climb steeply. Rate targets and lossless streams keep
 // Draco's usual 14 bits.
-constexpr int kMinPositionBits = 11, kMaxPositionBits = 24, kDefaultPositionBits = 14;
+constexpr int kMinPositionBits = 11, kMinKeptTargetBits = 12, kMaxPositionBits = 24, kDefaultPositionBits = 14;
 constexpr double kBaseStepRatio = 0.25, kBaseStepFrames = 48;
 }  // namespace
 
@@ -39,7 +40,8 @@ int automatic_position_bits(const std::vector<float>& positions, const std::vect
   const double step = expected_residual_step(clips, frame_spread(clips), settings.target) * kBaseStepRatio * coarser;
   if (!(extent > 0) || !(step > 0)) return kDefaultPositionBits;
   const double bits = std::round(std::log2(extent / step + 1));
-  return int(std::clamp(bits, double(kMinPositionBits), double(kMaxPositionBits)));
+  const int least = animation_stream ? kMinPositionBits : kMinKeptTargetBits;
+  return int(std::clamp(bits, double(least), double(kMaxPositionBits)));
 }
 
 // Reads every attribute of `primitive` (POSITION first) and its triangles into a base mesh.

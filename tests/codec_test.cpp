@@ -342,20 +342,25 @@ TEST(Codec, MotionRefinementLowersTheSegmentationErrorAtTheSameClusterCount) {
   EXPECT_LT(refined.report.e_pi, plain.report.e_pi);
 }
 
-// The encoder codes the Morse segmentation as found or as refined by Eq. 6, whichever its cluster count's estimate
-// finds cheaper, and says which: a stream reported unrefined is the stream of an encode with the refinement off, one
-// reported refined is not. The three bends choose both ways.
+// With choose_segmentation the encoder codes the Morse segmentation as found or as refined by Eq. 6, whichever its
+// cluster count's estimate finds cheaper, and says which: a stream reported unrefined is the stream of an encode with
+// the refinement off, one reported refined is the stream of the default encode (refined, no choice). The three bends
+// choose both ways.
 TEST(Codec, TheSegmentationCodedIsTheOneReported) {
   int refined = 0;
   for (double bend : {0.6, 1.2, 2.0}) {
     const std::vector<FrameSequence> clips = {bending_clip(24, bend, 0.5)};
     const std::vector<float> base = quantized_base(clips[0]);
     CodecSettings settings;
+    const Encoded refined_only = encode(clips, base, settings);
+    EXPECT_TRUE(refined_only.report.curvature_refined);
+    settings.choose_segmentation = true;
     const Encoded chosen = encode(clips, base, settings);
     settings.curvature_refinement = false;
     const Encoded unrefined = encode(clips, base, settings);
     EXPECT_FALSE(unrefined.report.curvature_refined);
     EXPECT_EQ(chosen.stream == unrefined.stream, !chosen.report.curvature_refined) << bend;
+    EXPECT_EQ(chosen.stream == refined_only.stream, chosen.report.curvature_refined) << bend;
     refined += chosen.report.curvature_refined;
   }
   EXPECT_EQ(refined, 1);

@@ -187,7 +187,7 @@ struct StreamReport {
   double e_pi_morse = 0;    // E(Π) of the Morse segmentation before merging to K and refinement (paper, Table 2)
   double e_pi = 0;          // E(Π) of the final clusters
   int curvature_refinement_passes = 0;   // passes of the concavity refinement of the Morse levels (Eq. 6)
-  bool curvature_refined = false;        // the clusters were merged from the refined levels (estimated smaller)
+  bool curvature_refined = false;        // the clusters were merged from the refined levels (Eq. 6)
   int motion_refinement_iterations = 0;  // rounds of moving boundary vertices to the clusters that predict them best
   double residual_steps[3] = {0, 0, 0};
   double kg_percent = 0;  // of the encoder's own reconstruction (of the animation it plays, for kept targets)
