@@ -41,6 +41,9 @@ struct CodecSettings {
   // Beyond the paper: the motion's differences coded in contexts, and predicted linearly, where that takes fewer
   // bytes (stream version 3).
   bool motion_contexts = true;
+  // Beyond the paper: each vertex's extra clusters coded as places among those recently blended into vertices of its
+  // own cluster, its count of them in contexts, where that takes fewer bytes (stream version 3).
+  bool weight_contexts = true;
   // Beyond the paper: the residuals in the table code of stream version 2 (table_residual_coding.h), which decodes
   // faster and costs more bytes than the adaptive code. Lossy modes only.
   bool table_residuals = false;

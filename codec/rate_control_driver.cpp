@@ -168,19 +168,25 @@ void RateControlDriver::drop_references() {
 }
 
 // The motion's coding, whichever of version 3's takes fewest bytes: the plain differences, in contexts, or in contexts
-// and predicted linearly (ties to the plainer, which more decoders read).
+// and predicted linearly; then the weights' coding, plain or in contexts (ties to the plainer, which more decoders
+// read). The two are separate sections of the head: each is chosen on its own.
 void RateControlDriver::choose_motion_coding() {
   const uint8_t contexts = format::kFlagMotionContexts, linear = format::kFlagLinearMotion;
-  content_.flags &= uint8_t(~(contexts | linear));
-  if (!settings_.motion_contexts) return;
+  const uint8_t weights = format::kFlagWeightContexts;
+  content_.flags &= uint8_t(~(contexts | linear | weights));
+  if (!settings_.motion_contexts && !settings_.weight_contexts) return;
   size_t best = side_bytes();
   uint8_t best_flags = content_.flags;
-  for (uint8_t option : {contexts, uint8_t(contexts | linear)}) {
-    content_.flags = uint8_t((content_.flags & ~(contexts | linear)) | option);
-    const size_t bytes = side_bytes();
-    if (bytes < best) best = bytes, best_flags = content_.flags;
-  }
+  if (settings_.motion_contexts)
+    for (uint8_t option : {contexts, uint8_t(contexts | linear)}) {
+      content_.flags = uint8_t((content_.flags & ~(contexts | linear)) | option);
+      const size_t bytes = side_bytes();
+      if (bytes < best) best = bytes, best_flags = content_.flags;
+    }
   content_.flags = best_flags;
+  if (!settings_.weight_contexts || content_.weight_cluster.empty()) return;
+  content_.flags |= weights;
+  if (side_bytes() >= best) content_.flags = best_flags;
 }
 
 // What the current curves promise: with an error target the stream's estimated bytes, with a rate target the

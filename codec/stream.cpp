@@ -33,6 +33,10 @@ struct Models {
   std::array<std::array<SignedModel, 4>, 12> motion_contexts;
   BitTreeModel extra_count{2};         // extra clusters per vertex (0..3)
   SignedModel weight;
+  // Version 3 with kFlagWeightContexts, instead (code_weights): the extra count in a context per count of the
+  // previous welded vertex, and each extra cluster as its place among its own cluster's recent extras.
+  std::array<BitTreeModel, 4> extra_count_contexts{BitTreeModel(2), BitTreeModel(2), BitTreeModel(2), BitTreeModel(2)};
+  BitTreeModel recent_place{3};  // 0 .. kRecentWeightClusters − 1, or kRecentWeightClusters: the index follows
   // The residuals' models are residual_coding.cpp's.
 };
 
@@ -221,7 +225,11 @@ Status code_motion(Coder& coder, Models& models, StreamContent& content) {
   return Status::Ok();
 }
 
-// The weights: their precision, then per welded vertex its extra clusters and their weights.
+// The weights: their precision, then per welded vertex its extra clusters and their weights. Version 3 with
+// kFlagWeightContexts (spec/bitstream.md, 5.6): the count of extras in the context of the previous welded vertex's
+// count, and each extra cluster as its place in a list of the kRecentWeightClusters clusters most recently blended
+// into vertices of the same own cluster (most recent first; the place past the end escapes to the cluster's index),
+// which then moves to the front of that list.
 template <class Coder>
 Status code_weights(Coder& coder, Models& models, StreamContent& content) {
   uint32_t weight_bits = uint32_t(content.weight_bits);
@@ -229,17 +237,36 @@ Status code_weights(Coder& coder, Models& models, StreamContent& content) {
   if (Coder::kReading) content.weight_bits = int(weight_bits);
   if (content.weight_bits < 1 || content.weight_bits > format::kMaxWeightBits) return corrupt("bad weight precision");
   BitTreeModel cluster_model(bits_for(content.cluster_count));
+  const bool contexts = content.flags & format::kFlagWeightContexts;
+  constexpr uint32_t kRecent = format::kRecentWeightClusters, kEmpty = UINT32_MAX;
+  std::vector<uint32_t> recent;  // per own cluster kRecent places, most recent first
+  if (contexts) recent.assign(size_t(content.cluster_count) * kRecent, kEmpty);
+  uint32_t previous_extra = 0;
   if (Coder::kReading) content.weight_offset.assign(1, 0);
   for (size_t w = 0; w < content.welded_count; ++w) {
     const uint32_t first = content.weight_offset[w];
     uint32_t extra = Coder::kReading ? 0 : content.weight_offset[w + 1] - first;
-    coder.tree(models.extra_count, extra);
+    coder.tree(contexts ? models.extra_count_contexts[previous_extra] : models.extra_count, extra);
     if (extra > format::kMaxExtraWeights) return corrupt("too many weights");
+    previous_extra = extra;
     coder.grow(content.weight_cluster, first + extra);
     coder.grow(content.weight_value, first + extra);
+    uint32_t* list = contexts ? &recent[size_t(content.labels[w]) * kRecent] : nullptr;
     for (uint32_t i = first; i < first + extra; ++i) {
-      coder.tree(cluster_model, content.weight_cluster[i]);
+      uint32_t place = kRecent;
+      if (contexts) {
+        if (!Coder::kReading) place = uint32_t(std::find(list, list + kRecent, content.weight_cluster[i]) - list);
+        coder.tree(models.recent_place, place);
+      }
+      if (place == kRecent)
+        coder.tree(cluster_model, content.weight_cluster[i]);
+      else if (Coder::kReading)
+        content.weight_cluster[i] = list[place];
       if (content.weight_cluster[i] >= content.cluster_count) return corrupt("weight cluster out of range");
+      if (contexts) {  // to the front; an escape drops the last place
+        std::copy_backward(list, list + std::min(place, kRecent - 1), list + std::min(place, kRecent - 1) + 1);
+        list[0] = content.weight_cluster[i];
+      }
       coder.integer(models.weight, content.weight_value[i]);
     }
     if (Coder::kReading) content.weight_offset.push_back(first + extra);
@@ -332,8 +359,8 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   const bool table = content.flags & format::kFlagTableResiduals;
   [[maybe_unused]] const bool references = content.flags & format::kFlagFrameReferences;
   assert(!references || content.references.size() == content.frame_count());
-  const bool version_3 =
-      content.flags & (format::kFlagFrameReferences | format::kFlagMotionContexts | format::kFlagLinearMotion);
+  const bool version_3 = content.flags & (format::kFlagFrameReferences | format::kFlagMotionContexts |
+                                          format::kFlagLinearMotion | format::kFlagWeightContexts);
   out.push_back(version_3 ? format::kReferenceVersion : table ? format::kTableVersion : format::kVersion);
   out.push_back(content.flags);
   const size_t length_at = out.size();

@@ -150,8 +150,8 @@ const Option kOptions[] = {
      [](CommandLine& line, const std::string&, double) { line.encode.fast_decode = true; }},
     {"--max-stream-version", nullptr, "N", kEncode, Kind::whole, 1, 3, false, nullptr, 0,
      "write animation streams of at most version N, {range} (default 3), for players whose decoder reads no later "
-     "one: version 3 adds frame references and the motion's contexts, which the encoder uses only where they make "
-     "a stream smaller; --fast-decode needs 2",
+     "one: version 3 adds frame references and the motion's and the weights' contexts, which the encoder uses only "
+     "where they make a stream smaller; --fast-decode needs 2",
      [](CommandLine& line, const std::string&, double number) { line.encode.max_stream_version = int(number); }},
     {"--clusters", nullptr, "K", kEncode, Kind::whole, 1, 65535, false, nullptr, 0,
      "number of motion clusters, {range}, at most what the segmentation gives a primitive (more is said and coded "

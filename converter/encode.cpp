@@ -275,7 +275,8 @@ Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinyglt
   choices.codec.target = settings.target;
   choices.codec.clusters = settings.clusters;
   choices.codec.table_residuals = settings.fast_decode;
-  choices.codec.frame_references = choices.codec.motion_contexts = settings.max_stream_version >= 3;
+  choices.codec.frame_references = choices.codec.motion_contexts = choices.codec.weight_contexts =
+      settings.max_stream_version >= 3;
   choices.codec.threads = settings.threads;
   choices.draco.position_bits = settings.position_bits;
   choices.draco.normal_bits = settings.normal_bits;

@@ -1,7 +1,7 @@
 // Frame references (stream version 3, codec/frame_references.h): the encoder gives a frame an earlier reference than
 // the previous one where the motion repeats itself, keeps them only when they pay, and every way of decoding (whole
 // clips, one frame or two at a time, after a seek) gives the encoder's frames; the decoder refuses references a
-// stream may not hold.
+// stream may not hold. The other tools of version 3 too: the motion's and the weights' contexts.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -145,6 +145,18 @@ TEST(FrameReferences, OneOrTwoFramesAtATimeAndAfterASeekAreTheEncodersFrames) {
   }
 }
 
+// The stream of `content` written again with its flags in `mask` replaced by `option`, and read back into `read`.
+std::vector<uint8_t> rewritten(const StreamContent& content, uint8_t mask, uint8_t option,
+                               const std::vector<float>& base, StreamContent& read) {
+  StreamContent changed = content;
+  changed.flags = uint8_t((content.flags & ~mask) | option);
+  std::vector<uint8_t> stream;
+  write_stream(changed, base, stream);
+  const Status status = read_stream(stream.data(), stream.size(), base, read);
+  EXPECT_TRUE(status.ok()) << status.message();
+  return stream;
+}
+
 // Version 3's motion codings (in contexts; in contexts and predicted linearly) carry the same coefficients as the
 // plain one, read back exactly, and decode to the same frames; the encoder keeps the smallest, which on a smooth
 // bend is not the plain one.
@@ -160,13 +172,9 @@ TEST(FrameReferences, MotionContextsAndLinearMotionCarryTheSameMotion) {
   const uint8_t both = format::kFlagMotionContexts | format::kFlagLinearMotion;
   for (uint8_t option : {uint8_t(0), uint8_t(format::kFlagMotionContexts), both}) {
     SCOPED_TRACE(int(option));
-    StreamContent changed = content;
-    changed.flags = uint8_t((content.flags & ~both) | option);
-    std::vector<uint8_t> stream;
-    write_stream(changed, base, stream);
-    sizes[option] = stream.size();
     StreamContent read;
-    ASSERT_TRUE(read_stream(stream.data(), stream.size(), base, read).ok());
+    const std::vector<uint8_t> stream = rewritten(content, both, option, base, read);
+    sizes[option] = stream.size();
     EXPECT_EQ(read.motion, content.motion);
     EXPECT_EQ(read.residuals, content.residuals);
     std::vector<FrameSequence> decoded;
@@ -177,13 +185,44 @@ TEST(FrameReferences, MotionContextsAndLinearMotionCarryTheSameMotion) {
   EXPECT_LT(encoded.stream.size(), sizes[0]);
 }
 
-// --max-stream-version below 3 (CodecSettings: neither frame references nor motion contexts) gives the stream of
+// Version 3's weight coding (the extra count in contexts, the extra clusters as places among their own cluster's
+// recent ones) carries the same weights as the plain one, reads back exactly and decodes to the same frames; the
+// encoder writes it where it is smaller, which with blended weights over a few clusters it is.
+TEST(FrameReferences, WeightContextsCarryTheSameWeights) {
+  const std::vector<FrameSequence> clips = {testing::bending_clip(30, 1.5, 0.2)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  CodecSettings settings;
+  settings.clusters = 8;
+  const Encoded encoded = encode(clips, base, settings);
+  ASSERT_EQ(encoded.stream[4], format::kReferenceVersion);
+  EXPECT_TRUE(encoded.stream[5] & format::kFlagWeightContexts);
+  StreamContent content;
+  ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+  ASSERT_GT(content.weight_cluster.size(), 100u);
+  std::map<uint8_t, size_t> sizes;
+  for (uint8_t option : {uint8_t(0), format::kFlagWeightContexts}) {
+    SCOPED_TRACE(int(option));
+    StreamContent read;
+    const std::vector<uint8_t> stream = rewritten(content, format::kFlagWeightContexts, option, base, read);
+    sizes[option] = stream.size();
+    EXPECT_EQ(read.weight_offset, content.weight_offset);
+    EXPECT_EQ(read.weight_cluster, content.weight_cluster);
+    EXPECT_EQ(read.weight_value, content.weight_value);
+    std::vector<FrameSequence> decoded;
+    ASSERT_TRUE(decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded).ok());
+    EXPECT_EQ(decoded[0].positions, encoded.reconstruction[0].positions);
+  }
+  EXPECT_EQ(encoded.stream.size(), sizes[format::kFlagWeightContexts]);
+  EXPECT_LT(sizes[format::kFlagWeightContexts], sizes[0]);
+}
+
+// --max-stream-version below 3 (CodecSettings: no frame references, no motion or weight contexts) gives the stream of
 // versions 1 and 2 for the same input.
 TEST(FrameReferences, WithoutVersionThreesToolsTheStreamIsVersionOne) {
   const std::vector<FrameSequence> clips = {cycling_clip(24, 8)};
   const std::vector<float> base = quantized_base(clips[0]);
   CodecSettings settings;
-  settings.frame_references = settings.motion_contexts = false;
+  settings.frame_references = settings.motion_contexts = settings.weight_contexts = false;
   const Encoded encoded = encode(clips, base, settings);
   EXPECT_EQ(encoded.stream[4], format::kVersion);
   std::vector<FrameSequence> decoded;
@@ -219,6 +258,67 @@ std::string refusal(const std::vector<uint8_t>& stream) {
   const Status status = read_stream(stream.data(), stream.size(), base, content);
   EXPECT_EQ(status.code(), StatusCode::bad_data);
   return status.message();
+}
+
+// The head of a version-3 stream with WEIGHT_CONTEXTS for 3 vertices (labels 0, 0, 1 of K = 2) and one frame of zero
+// motion, up to its residual steps, coded symbol by symbol as spec/bitstream.md (5.1-5.7) says: each vertex's extras as
+// (place, cluster if the place is the escape, value).
+struct Extra {
+  uint32_t place, cluster;
+  int32_t value;
+};
+std::vector<uint8_t> head_with_weights(const std::vector<std::vector<Extra>>& extras) {
+  std::vector<uint8_t> out = {'S', 'G', 'M', 'A', format::kReferenceVersion, format::kFlagWeightContexts, 0, 0, 0, 0};
+  {
+    RangeEncoder encoder(out);
+    UnsignedModel count;
+    for (uint32_t value : {3u, 1u, 1u, 2u}) count.encode(encoder, value);  // V, C, the frames, K
+    BitTreeModel label(1);
+    for (uint32_t value : {0u, 0u, 1u}) label.encode(encoder, value);
+    for (int i = 0; i < 2; ++i) encoder.encode_direct_bits(0x3c23d70a, 32);  // the motion steps: 0.01f
+    std::array<SignedModel, 12> motion;
+    for (int k = 0; k < 2; ++k)
+      for (SignedModel& slot : motion) slot.encode(encoder, 0);
+    count.encode(encoder, 8);  // weight_bits
+    std::array<BitTreeModel, 4> extra_count{BitTreeModel(2), BitTreeModel(2), BitTreeModel(2), BitTreeModel(2)};
+    BitTreeModel place(3), cluster(1);
+    SignedModel weight;
+    uint32_t previous = 0;
+    for (const std::vector<Extra>& vertex : extras) {
+      extra_count[previous].encode(encoder, uint32_t(vertex.size()));
+      previous = uint32_t(vertex.size());
+      for (const Extra& extra : vertex) {
+        place.encode(encoder, extra.place);
+        if (extra.place == format::kRecentWeightClusters) cluster.encode(encoder, extra.cluster);
+        weight.encode(encoder, extra.value);
+      }
+    }
+    for (int axis = 0; axis < 3; ++axis) encoder.encode_direct_bits(0x3c23d70a, 32);  // the residual steps
+    encoder.finish();
+  }
+  const uint32_t length = uint32_t(out.size() - format::kHeaderBytes);
+  for (int i = 0; i < 4; ++i) out[6 + size_t(i)] = uint8_t(length >> (8 * i));
+  return out;
+}
+
+// Places name the clusters last blended into vertices of the same own cluster, most recent first: vertex 1 (label 0)
+// finds vertex 0's extra cluster 1 at place 0, and after vertex 1's escape to cluster 0 (which the decoder accepts
+// although a vertex's own cluster gains nothing from it) cluster 1 is at place 1. Vertex 2 (label 1) has a list of
+// its own, empty: a place in it is refused.
+TEST(FrameReferences, WeightPlacesNameRecentClustersOfTheSameLabel) {
+  const std::vector<float> base = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const uint32_t escape = format::kRecentWeightClusters;
+  const std::vector<uint8_t> stream =
+      head_with_weights({{{escape, 1, 64}}, {{0, 0, 32}, {escape, 0, -8}, {1, 0, 5}}, {}});
+  StreamContent content;
+  StreamReader reader(stream.data(), stream.size());
+  ASSERT_TRUE(reader.read_head(base, content).ok());
+  EXPECT_EQ(content.weight_offset, (std::vector<uint32_t>{0, 1, 4, 4}));
+  EXPECT_EQ(content.weight_cluster, (std::vector<uint32_t>{1, 1, 0, 1}));
+  EXPECT_EQ(content.weight_value, (std::vector<int32_t>{64, 32, -8, 5}));
+  EXPECT_NE(refusal(head_with_weights({{}, {}, {{0, 0, 64}}})).find("weight cluster out of range"), std::string::npos);
+  EXPECT_NE(refusal(head_with_weights({{{escape, 1, 64}}, {}, {{0, 0, 64}}})).find("weight cluster out of range"),
+            std::string::npos);
 }
 
 // References a stream may not hold are refused as bad data before anything is read or sized by them: a window of

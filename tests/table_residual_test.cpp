@@ -91,7 +91,7 @@ using testing::encode;
 // frame_references_test covers (with the table code too).
 CodecSettings table(CodecSettings settings) {
   settings.table_residuals = true;
-  settings.frame_references = settings.motion_contexts = false;
+  settings.frame_references = settings.motion_contexts = settings.weight_contexts = false;
   return settings;
 }
 
@@ -222,10 +222,10 @@ TEST(TableResiduals, VersionTwoAndTheFlagOnlyWithTheSetting) {
   EXPECT_FALSE(CodecSettings().table_residuals);
   CodecSettings adaptive;
   adaptive.table_residuals = false;
-  adaptive.frame_references = adaptive.motion_contexts = false;
+  adaptive.frame_references = adaptive.motion_contexts = adaptive.weight_contexts = false;
   const Encoded plain = encode(clips, base, adaptive), fast = encode(clips, base, table(CodecSettings()));
   CodecSettings defaults;
-  defaults.frame_references = defaults.motion_contexts = false;
+  defaults.frame_references = defaults.motion_contexts = defaults.weight_contexts = false;
   EXPECT_EQ(plain.stream, encode(clips, base, defaults).stream);
   EXPECT_EQ(plain.stream[4], format::kVersion);
   EXPECT_FALSE(plain.stream[5] & format::kFlagTableResiduals);
@@ -249,7 +249,7 @@ TEST(TableResiduals, LosslessIgnoresTheSetting) {
   const std::vector<float> base = quantized_base(clips[0]);
   CodecSettings lossless;
   lossless.mode = RateMode::lossless;
-  lossless.frame_references = lossless.motion_contexts = false;
+  lossless.frame_references = lossless.motion_contexts = lossless.weight_contexts = false;
   const Encoded encoded = encode(clips, base, table(lossless));
   EXPECT_EQ(encoded.stream, encode(clips, base, lossless).stream);
   EXPECT_EQ(encoded.stream[4], format::kVersion);
@@ -431,7 +431,7 @@ TEST(TableResidualsHostile, TableFlagOutsideVersionTwoOrInALosslessStreamIsRefus
 
   // An adaptive stream marked version 2 decodes as it does marked version 1 (and so does one marked version 3).
   CodecSettings plain = error(0.15);
-  plain.frame_references = plain.motion_contexts = false;
+  plain.frame_references = plain.motion_contexts = plain.weight_contexts = false;
   const Encoded adaptive = encode(s.clips, s.base, plain);
   ASSERT_EQ(adaptive.stream[4], format::kVersion);
   std::vector<uint8_t> three = adaptive.stream;

@@ -1,7 +1,8 @@
 // Writes the seed corpus of fuzz_animation_stream: valid streams of small synthetic animations of the fuzzer's
 // base mesh, one per codec configuration (lossy at several targets, lossless, fixed cluster counts, each residual
 // predictor on and off, several clips; version 1 with the adaptive residual code, version 2 with the table code and
-// version 3 with frame references, on animations that repeat their frames), so that mutations start from every path
+// version 3 with frame references, on animations that repeat their frames, and with the motion's and the weights'
+// contexts), so that mutations start from every path
 // of the decoder. Each stream is checked to be of the version its settings
 // ask for and to decode to the encoder's reconstruction before it is written.
 //
@@ -15,6 +16,8 @@
 
 #include "codec.h"
 #include "fuzz_base_mesh.h"
+#include "stream.h"
+#include "stream_format.h"
 
 namespace segmorph::fuzz {
 namespace {
@@ -75,27 +78,31 @@ struct Seed {
   CodecSettings settings;
   std::vector<size_t> clip_frames;
   size_t period = 0;  // with frame references: the clips repeat their frames with this period
+  // The stream written again with version 3's weight contexts, which the encoder finds too costly on a mesh this
+  // small: the weights' other coding reaches the fuzzer only so.
+  bool weight_contexts = false;
 };
 
-// Without version 3's tools (frame references, the motion's contexts) unless references() or contexts(): the seeds of
+// Without version 3's tools (frame references, the motion's and the weights' contexts) unless references(), contexts()
+// or weight_contexts(): the seeds of
 // versions 1 and 2 stay of those versions whatever the encoder finds in their frames.
 CodecSettings lossy(double error) {
   CodecSettings settings;
   settings.target = error;
-  settings.frame_references = settings.motion_contexts = false;
+  settings.frame_references = settings.motion_contexts = settings.weight_contexts = false;
   return settings;
 }
 
 CodecSettings lossless() {
   CodecSettings settings;
   settings.mode = RateMode::lossless;
-  settings.frame_references = settings.motion_contexts = false;
+  settings.frame_references = settings.motion_contexts = settings.weight_contexts = false;
   return settings;
 }
 
 CodecSettings bpvf(double bits) {
   CodecSettings settings;
-  settings.frame_references = settings.motion_contexts = false;
+  settings.frame_references = settings.motion_contexts = settings.weight_contexts = false;
   settings.mode = RateMode::bpvf;
   settings.target = bits;
   return settings;
@@ -127,6 +134,12 @@ CodecSettings references(CodecSettings settings) {
 // The motion's coding chosen by the encoder (stream version 3 where contexts or linear prediction pay).
 CodecSettings contexts(CodecSettings settings) {
   settings.motion_contexts = true;
+  return settings;
+}
+
+// The weights' coding chosen by the encoder (stream version 3 where their contexts pay).
+CodecSettings weight_contexts(CodecSettings settings) {
+  settings.weight_contexts = true;
   return settings;
 }
 
@@ -166,6 +179,8 @@ std::vector<Seed> seeds() {
       {"references_table", table(references(lossy(0.15))), {12}, 4},
       {"motion_contexts_error_0.15", contexts(lossy(0.15)), {24}},
       {"motion_contexts_lossless_two_clips", contexts(lossless()), {16, 9}},
+      {"weight_contexts_error_0.15", with_clusters(lossy(0.15), 6), {10}, 0, true},
+      {"weight_contexts_references_two_clips", weight_contexts(references(lossy(0.5))), {9, 8}, 3, true},
   };
 }
 
@@ -191,8 +206,18 @@ int main(int argc, char** argv) {
     std::vector<uint8_t> stream;
     std::vector<FrameSequence> reconstruction, decoded;
     Status status = encode_animation(clips, mesh.positions, seed.settings, stream, nullptr, &reconstruction);
-    const int version =
-        seed.settings.frame_references || seed.settings.motion_contexts ? 3 : seed.settings.table_residuals ? 2 : 1;
+    StreamContent content;
+    if (status.ok() && seed.weight_contexts)
+      status = read_stream(stream.data(), stream.size(), mesh.positions, content);
+    if (status.ok() && seed.weight_contexts) {
+      if (content.weight_cluster.empty()) status = Status(StatusCode::internal, "no extra weights");
+      content.flags |= format::kFlagWeightContexts;
+      stream.clear();
+      write_stream(content, mesh.positions, stream);
+    }
+    const bool version_3 = seed.settings.frame_references || seed.settings.motion_contexts ||
+                           seed.settings.weight_contexts || seed.weight_contexts;
+    const int version = version_3 ? 3 : seed.settings.table_residuals ? 2 : 1;
     if (status.ok() && (stream.size() < 5 || stream[4] != version))
       status = Status(StatusCode::internal, "not a version-" + std::to_string(version) + " stream");
     if (status.ok()) status = decode_animation(stream.data(), stream.size(), mesh.positions, mesh.triangles, decoded);
