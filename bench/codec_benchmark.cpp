@@ -21,6 +21,7 @@
 #include "reconstruction.h"
 #include "sample.h"
 #include "segmentation.h"
+#include "sample_first_animated.h"
 #include "stand_in_base.h"
 #include "segmorph/decoder_c.h"
 #include "stream.h"
@@ -48,13 +49,8 @@ struct Fixture {
 Fixture* fixture = nullptr;
 
 bool set_up(const char* path, double error, bool table_residuals) {
-  tinygltf::Model model;
-  Scene scene;
   SampledNode node;
-  Status status = load_gltf(path, model);
-  if (status.ok()) status = analyze_scene(model, scene);
-  if (status.ok() && scene.animated.empty()) status = Status(StatusCode::invalid_argument, "nothing is animated");
-  if (status.ok()) status = sample_node(model, scene, scene.animated[0], SampleSettings(), node);
+  Status status = bench::sample_first_animated(path, node);
   CodecSettings settings;
   settings.target = error;
   settings.table_residuals = table_residuals;

@@ -18,6 +18,7 @@
 #include "gltf_io.h"
 #include "metrics.h"
 #include "sample.h"
+#include "sample_first_animated.h"
 #include "stand_in_base.h"
 
 using namespace segmorph;
@@ -62,12 +63,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  tinygltf::Model model;
-  Scene scene;
   SampledNode node;
-  Status status = load_gltf(argv[1], model);
-  if (status.ok()) status = analyze_scene(model, scene);
-  if (status.ok()) status = sample_node(model, scene, scene.animated[0], SampleSettings(), node);
+  Status status = bench::sample_first_animated(argv[1], node);
   if (!status.ok()) {
     std::fprintf(stderr, "codec_sequence: %s: %s\n", argv[1], status.message().c_str());
     return 1;

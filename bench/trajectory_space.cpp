@@ -1,0 +1,211 @@
+// How much a temporal basis could save on the residuals (issue lever "trajectory-space coding"): encodes one animated
+// glTF file as codec_sequence does (its first animated primitive, against the stand-in base mesh), then takes the
+// open-loop residuals of the stream it wrote (each welded vertex's frames minus the prediction of the stream's
+// quantized motion and weights: trajectories of F values per vertex and axis, in units of the axis's residual step)
+// and prices them with zeroth-order entropies (no context modelling anywhere, so the figures compare schemes, not
+// coders):
+//   - today's scheme: the residuals quantized closed loop against the previous frame's reconstruction, per axis;
+//   - the trajectories in a temporal basis, its coefficients quantized with one step D: a DCT along time (no basis to
+//     send), one PCA basis of all trajectories, or one PCA basis per cluster (the trajectories of its vertices' three
+//     axes); the basis sent at B bits per entry. For each, the D and the basis size m (per cluster, for the
+//     per-cluster bases) that cost least at a squared error no larger than today's scheme's; the coefficients of each
+//     basis vector priced in a context of their own.
+// The coder itself spends less than the zeroth-order price of today's scheme (its spatial prediction, contexts and
+// frame references): the stream's residual bytes are printed beside it.
+//   trajectory_space FILE [--error E] [--basis-bits B]
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "codec.h"
+#include "gltf_io.h"
+#include "reconstruction.h"
+#include "sample.h"
+#include "sample_first_animated.h"
+#include "stand_in_base.h"
+#include "stream.h"
+
+using namespace segmorph;
+using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+namespace {
+
+// Zeroth-order entropy, in bits, of a set of integer symbols.
+double entropy_bits(std::vector<int64_t> symbols) {
+  std::sort(symbols.begin(), symbols.end());
+  double bits = 0;
+  for (size_t i = 0, j = 0; i < symbols.size(); i = j) {
+    while (j < symbols.size() && symbols[j] == symbols[i]) ++j;
+    bits -= double(j - i) * std::log2(double(j - i) / double(symbols.size()));
+  }
+  return bits;
+}
+
+struct Price {
+  double bits = INFINITY, step = 0, basis_bits = 0;
+  size_t size = 0;
+};
+
+// The cheapest (D, m) for the trajectories `rows` (n × F) in the orthonormal basis `basis` (rows: vectors), at a
+// squared error of at most `budget` in all (the coefficients of vector i coded in context i).
+Price price_in_basis(const Matrix& rows, const Matrix& basis, double budget, double bits_per_basis_entry) {
+  Matrix coefficients = rows * basis.transpose();  // n × M
+  const size_t vectors = size_t(basis.rows());
+  std::vector<double> energy(vectors);
+  for (size_t i = 0; i < vectors; ++i) energy[i] = coefficients.col(Eigen::Index(i)).squaredNorm();
+  std::vector<size_t> order(vectors);
+  for (size_t i = 0; i < vectors; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return energy[a] > energy[b]; });
+  const double total = rows.squaredNorm();
+  Price best;
+  for (int d = 0; d < 40; ++d) {
+    const double step = 0.3 * std::pow(20 / 0.3, d / 39.0);
+    double kept = 0, quantization = 0, bits = 0;
+    for (size_t m = 1; m <= vectors; ++m) {
+      const Eigen::Index column = Eigen::Index(order[m - 1]);
+      std::vector<int64_t> symbols(size_t(rows.rows()));
+      for (Eigen::Index r = 0; r < rows.rows(); ++r) {
+        const double c = coefficients(r, column);
+        symbols[size_t(r)] = std::llround(c / step);
+        quantization += (c - double(symbols[size_t(r)]) * step) * (c - double(symbols[size_t(r)]) * step);
+      }
+      kept += energy[size_t(column)];
+      bits += entropy_bits(symbols);
+      const double error = total - kept + quantization;
+      const double basis_bits = double(m) * double(basis.cols()) * bits_per_basis_entry;
+      if (error <= budget && bits + basis_bits < best.bits) best = Price{bits + basis_bits, step, basis_bits, m};
+    }
+  }
+  return best;
+}
+
+// Orthonormal PCA basis (right singular vectors) of the rows.
+Matrix pca_basis(const Matrix& rows) {
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(rows, Eigen::ComputeThinV);
+  return svd.matrixV().transpose();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: trajectory_space FILE [--error E] [--basis-bits B]\n");
+    return 2;
+  }
+  CodecSettings settings;
+  double basis_entry_bits = 6;
+  for (int i = 2; i + 1 < argc; i += 2) {
+    if (std::strcmp(argv[i], "--error") == 0)
+      settings.target = std::atof(argv[i + 1]);
+    else if (std::strcmp(argv[i], "--basis-bits") == 0)
+      basis_entry_bits = std::atof(argv[i + 1]);
+    else
+      return std::fprintf(stderr, "trajectory_space: unknown option %s\n", argv[i]), 2;
+  }
+  SampledNode node;
+  Status status = bench::sample_first_animated(argv[1], node);
+  const std::vector<FrameSequence>& clips = node.primitives[0].clips;
+  const std::vector<float> base = status.ok() ? bench::stand_in_base(clips[0]) : std::vector<float>();
+  std::vector<uint8_t> stream;
+  StreamReport report;
+  StreamContent content;
+  if (status.ok()) status = encode_animation(clips, base, settings, stream, &report);
+  if (status.ok()) status = read_stream(stream.data(), stream.size(), base, content);
+  if (!status.ok()) {
+    std::fprintf(stderr, "trajectory_space: %s: %s\n", argv[1], status.message().c_str());
+    return 1;
+  }
+  const size_t vertices = content.vertex_count, welded = content.welded_count, frames = content.frame_count();
+  const std::vector<double> predicted = predicted_frames(content, welded_base(base, content));
+  std::vector<uint32_t> first(welded, UINT32_MAX);
+  for (uint32_t v = 0; v < vertices; ++v)
+    if (first[content.welded_index[v]] == UINT32_MAX) first[content.welded_index[v]] = v;
+  // Trajectories: row w × 3 + axis, F columns, in units of the axis's step.
+  Matrix rows(Eigen::Index(welded * 3), Eigen::Index(frames));
+  size_t frame = 0;
+  for (const FrameSequence& clip : clips)
+    for (size_t f = 0; f < clip.frame_count; ++f, ++frame)
+      for (size_t w = 0; w < welded; ++w)
+        for (size_t axis = 0; axis < 3; ++axis)
+          rows(Eigen::Index(w * 3 + axis), Eigen::Index(frame)) =
+              (double(clip.positions[(f * vertices + first[w]) * 3 + axis]) -
+               predicted[(frame * welded + w) * 3 + axis]) /
+              double(content.residual_step[axis]);
+
+  // Today's scheme, closed loop against the previous frame, per axis.
+  double today_bits = 0, today_error = 0;
+  for (size_t axis = 0; axis < 3; ++axis) {
+    std::vector<int64_t> symbols;
+    for (size_t w = 0; w < welded; ++w) {
+      double reconstructed = 0;
+      for (size_t f = 0; f < frames; ++f) {
+        const double value = rows(Eigen::Index(w * 3 + axis), Eigen::Index(f));
+        const int64_t q = std::llround(value - reconstructed);
+        reconstructed += double(q);
+        today_error += (value - reconstructed) * (value - reconstructed);
+        symbols.push_back(q);
+      }
+    }
+    today_bits += entropy_bits(symbols);
+  }
+  std::printf(
+      "%s --error %g: W=%zu F=%zu K=%u | stream residuals %zu B | today's scheme (closed loop on the previous "
+      "frame), zeroth order: %.0f B at squared error %.4g step^2 per value\n",
+      argv[1], settings.target, welded, frames, content.cluster_count, report.bytes_residuals, today_bits / 8,
+      today_error / double(rows.size()));
+
+  // DCT-II along time, orthonormal.
+  Matrix dct = Matrix::Zero(Eigen::Index(frames), Eigen::Index(frames));
+  for (size_t k = 0; k < frames; ++k)
+    for (size_t n = 0; n < frames; ++n)
+      dct(Eigen::Index(k), Eigen::Index(n)) = std::cos(M_PI * (double(n) + 0.5) * double(k) / double(frames)) *
+                                              std::sqrt((k == 0 ? 1.0 : 2.0) / double(frames));
+  auto print = [&](const char* name, const Price& price, const std::string& extra) {
+    if (std::isinf(price.bits))
+      std::printf("  %s: no step and size meet the error\n", name);
+    else
+      std::printf("  %s: %.0f B (basis %.0f B)%s\n", name, price.bits / 8, price.basis_bits / 8, extra.c_str());
+  };
+  auto step = [](const Price& price) {
+    char text[32];
+    std::snprintf(text, sizeof(text), ", D %.3g steps", price.step);
+    return std::string(text);
+  };
+  const Price in_dct = price_in_basis(rows, dct, today_error, 0);
+  print("DCT along time", in_dct, step(in_dct) + ", " + std::to_string(in_dct.size) + " coefficients per trajectory");
+  const Price global = price_in_basis(rows, pca_basis(rows), today_error, basis_entry_bits);
+  print("one PCA basis", global, step(global) + ", " + std::to_string(global.size) + " vectors");
+
+  // One basis per cluster, each cluster held to today's error on its own trajectories.
+  Price clusters{0, 0, 0, 0};
+  std::string sizes;
+  for (uint32_t k = 0; k < content.cluster_count; ++k) {
+    std::vector<Eigen::Index> members;
+    for (size_t w = 0; w < welded; ++w)
+      if (content.labels[w] == k)
+        for (Eigen::Index axis = 0; axis < 3; ++axis) members.push_back(Eigen::Index(w * 3) + axis);
+    if (members.empty()) continue;
+    Matrix own(Eigen::Index(members.size()), Eigen::Index(frames));
+    for (size_t i = 0; i < members.size(); ++i) own.row(Eigen::Index(i)) = rows.row(members[i]);
+    double own_error = 0;  // today's error on these trajectories
+    for (size_t i = 0; i < members.size(); ++i) {
+      double reconstructed = 0;
+      for (size_t f = 0; f < frames; ++f) {
+        const double value = own(Eigen::Index(i), Eigen::Index(f));
+        reconstructed += double(std::llround(value - reconstructed));
+        own_error += (value - reconstructed) * (value - reconstructed);
+      }
+    }
+    const Price price = price_in_basis(own, pca_basis(own), own_error, basis_entry_bits);
+    clusters.bits += price.bits, clusters.basis_bits += price.basis_bits;
+    if (std::isinf(price.bits)) clusters.bits = INFINITY;
+    sizes += (sizes.empty() ? "" : " ") + std::to_string(price.size) + "@" + step(price).substr(4, 4);
+  }
+  print("a PCA basis per cluster", clusters, " (each its own D), vectors@D per cluster: " + sizes);
+  std::printf("  (bases at %g bits per entry)\n", basis_entry_bits);
+  return 0;
+}
