@@ -20,10 +20,10 @@
 #include "rate_control.h"
 #include "reconstruction.h"
 #include "sample.h"
-#include "segmentation.h"
 #include "sample_first_animated.h"
-#include "stand_in_base.h"
+#include "segmentation.h"
 #include "segmorph/decoder_c.h"
+#include "stand_in_base.h"
 #include "stream.h"
 #include "topology.h"
 

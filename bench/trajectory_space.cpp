@@ -98,8 +98,10 @@ int main(int argc, char** argv) {
   }
   CodecSettings settings;
   double basis_entry_bits = 6;
-  for (int i = 2; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--error") == 0)
+  for (int i = 2; i < argc; i += 2) {
+    if (i + 1 == argc)
+      return std::fprintf(stderr, "trajectory_space: %s needs a value\n", argv[i]), 2;
+    else if (std::strcmp(argv[i], "--error") == 0)
       settings.target = std::atof(argv[i + 1]);
     else if (std::strcmp(argv[i], "--basis-bits") == 0)
       basis_entry_bits = std::atof(argv[i + 1]);
@@ -108,12 +110,16 @@ int main(int argc, char** argv) {
   }
   SampledNode node;
   Status status = bench::sample_first_animated(argv[1], node);
-  const std::vector<FrameSequence>& clips = node.primitives[0].clips;
-  const std::vector<float> base = status.ok() ? bench::stand_in_base(clips[0]) : std::vector<float>();
+  std::vector<FrameSequence> clips;
+  std::vector<float> base;
   std::vector<uint8_t> stream;
   StreamReport report;
   StreamContent content;
-  if (status.ok()) status = encode_animation(clips, base, settings, stream, &report);
+  if (status.ok()) {
+    clips = node.primitives[0].clips;
+    base = bench::stand_in_base(clips[0]);
+    status = encode_animation(clips, base, settings, stream, &report);
+  }
   if (status.ok()) status = read_stream(stream.data(), stream.size(), base, content);
   if (!status.ok()) {
     std::fprintf(stderr, "trajectory_space: %s: %s\n", argv[1], status.message().c_str());
@@ -136,8 +142,9 @@ int main(int argc, char** argv) {
                predicted[(frame * welded + w) * 3 + axis]) /
               double(content.residual_step[axis]);
 
-  // Today's scheme, closed loop against the previous frame, per axis.
+  // Today's scheme, closed loop against the previous frame: the symbols per axis, the squared error per trajectory.
   double today_bits = 0, today_error = 0;
+  std::vector<double> row_error(welded * 3, 0.0);
   for (size_t axis = 0; axis < 3; ++axis) {
     std::vector<int64_t> symbols;
     for (size_t w = 0; w < welded; ++w) {
@@ -146,9 +153,10 @@ int main(int argc, char** argv) {
         const double value = rows(Eigen::Index(w * 3 + axis), Eigen::Index(f));
         const int64_t q = std::llround(value - reconstructed);
         reconstructed += double(q);
-        today_error += (value - reconstructed) * (value - reconstructed);
+        row_error[w * 3 + axis] += (value - reconstructed) * (value - reconstructed);
         symbols.push_back(q);
       }
+      today_error += row_error[w * 3 + axis];
     }
     today_bits += entropy_bits(symbols);
   }
@@ -172,13 +180,14 @@ int main(int argc, char** argv) {
   };
   auto step = [](const Price& price) {
     char text[32];
-    std::snprintf(text, sizeof(text), ", D %.3g steps", price.step);
+    std::snprintf(text, sizeof(text), "%.3g", price.step);
     return std::string(text);
   };
   const Price in_dct = price_in_basis(rows, dct, today_error, 0);
-  print("DCT along time", in_dct, step(in_dct) + ", " + std::to_string(in_dct.size) + " coefficients per trajectory");
+  print("DCT along time", in_dct,
+        ", D " + step(in_dct) + " steps, " + std::to_string(in_dct.size) + " coefficients per trajectory");
   const Price global = price_in_basis(rows, pca_basis(rows), today_error, basis_entry_bits);
-  print("one PCA basis", global, step(global) + ", " + std::to_string(global.size) + " vectors");
+  print("one PCA basis", global, ", D " + step(global) + " steps, " + std::to_string(global.size) + " vectors");
 
   // One basis per cluster, each cluster held to today's error on its own trajectories.
   Price clusters{0, 0, 0, 0};
@@ -190,20 +199,15 @@ int main(int argc, char** argv) {
         for (Eigen::Index axis = 0; axis < 3; ++axis) members.push_back(Eigen::Index(w * 3) + axis);
     if (members.empty()) continue;
     Matrix own(Eigen::Index(members.size()), Eigen::Index(frames));
-    for (size_t i = 0; i < members.size(); ++i) own.row(Eigen::Index(i)) = rows.row(members[i]);
     double own_error = 0;  // today's error on these trajectories
     for (size_t i = 0; i < members.size(); ++i) {
-      double reconstructed = 0;
-      for (size_t f = 0; f < frames; ++f) {
-        const double value = own(Eigen::Index(i), Eigen::Index(f));
-        reconstructed += double(std::llround(value - reconstructed));
-        own_error += (value - reconstructed) * (value - reconstructed);
-      }
+      own.row(Eigen::Index(i)) = rows.row(members[i]);
+      own_error += row_error[size_t(members[i])];
     }
     const Price price = price_in_basis(own, pca_basis(own), own_error, basis_entry_bits);
     clusters.bits += price.bits, clusters.basis_bits += price.basis_bits;
     if (std::isinf(price.bits)) clusters.bits = INFINITY;
-    sizes += (sizes.empty() ? "" : " ") + std::to_string(price.size) + "@" + step(price).substr(4, 4);
+    sizes += (sizes.empty() ? "" : " ") + std::to_string(price.size) + "@" + step(price);
   }
   print("a PCA basis per cluster", clusters, " (each its own D), vectors@D per cluster: " + sizes);
   std::printf("  (bases at %g bits per entry)\n", basis_entry_bits);

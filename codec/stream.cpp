@@ -264,7 +264,8 @@ Status code_weights(Coder& coder, Models& models, StreamContent& content) {
         content.weight_cluster[i] = list[place];
       if (content.weight_cluster[i] >= content.cluster_count) return corrupt("weight cluster out of range");
       if (contexts) {  // to the front; an escape drops the last place
-        std::copy_backward(list, list + std::min(place, kRecent - 1), list + std::min(place, kRecent - 1) + 1);
+        const uint32_t moved = std::min(place, kRecent - 1);
+        std::copy_backward(list, list + moved, list + moved + 1);
         list[0] = content.weight_cluster[i];
       }
       coder.integer(models.weight, content.weight_value[i]);

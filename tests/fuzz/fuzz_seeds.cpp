@@ -2,9 +2,8 @@
 // base mesh, one per codec configuration (lossy at several targets, lossless, fixed cluster counts, each residual
 // predictor on and off, several clips; version 1 with the adaptive residual code, version 2 with the table code and
 // version 3 with frame references, on animations that repeat their frames, and with the motion's and the weights'
-// contexts), so that mutations start from every path
-// of the decoder. Each stream is checked to be of the version its settings
-// ask for and to decode to the encoder's reconstruction before it is written.
+// contexts), so that mutations start from every path of the decoder. Each stream is checked to be of the version its
+// settings ask for and to decode to the encoder's reconstruction before it is written.
 //
 //   fuzz_seeds OUTPUT_DIRECTORY
 #include <cmath>
@@ -80,12 +79,12 @@ struct Seed {
   size_t period = 0;  // with frame references: the clips repeat their frames with this period
   // The stream written again with version 3's weight contexts, which the encoder finds too costly on a mesh this
   // small: the weights' other coding reaches the fuzzer only so.
-  bool weight_contexts = false;
+  bool force_weight_contexts = false;
 };
 
-// Without version 3's tools (frame references, the motion's and the weights' contexts) unless references(), contexts()
-// or weight_contexts(): the seeds of
-// versions 1 and 2 stay of those versions whatever the encoder finds in their frames.
+// Without version 3's tools (frame references, the motion's and the weights' contexts) unless references() or
+// contexts(), or a seed forces the weights' contexts: the seeds of versions 1 and 2 stay of those versions whatever
+// the encoder finds in their frames.
 CodecSettings lossy(double error) {
   CodecSettings settings;
   settings.target = error;
@@ -137,12 +136,6 @@ CodecSettings contexts(CodecSettings settings) {
   return settings;
 }
 
-// The weights' coding chosen by the encoder (stream version 3 where their contexts pay).
-CodecSettings weight_contexts(CodecSettings settings) {
-  settings.weight_contexts = true;
-  return settings;
-}
-
 // The paper's plain scheme: no refinements, no blending.
 CodecSettings plain(CodecSettings settings) {
   settings.curvature_refinement = false;
@@ -180,7 +173,7 @@ std::vector<Seed> seeds() {
       {"motion_contexts_error_0.15", contexts(lossy(0.15)), {24}},
       {"motion_contexts_lossless_two_clips", contexts(lossless()), {16, 9}},
       {"weight_contexts_error_0.15", with_clusters(lossy(0.15), 6), {10}, 0, true},
-      {"weight_contexts_references_two_clips", weight_contexts(references(lossy(0.5))), {9, 8}, 3, true},
+      {"weight_contexts_references_two_clips", references(lossy(0.5)), {9, 8}, 3, true},
   };
 }
 
@@ -206,17 +199,18 @@ int main(int argc, char** argv) {
     std::vector<uint8_t> stream;
     std::vector<FrameSequence> reconstruction, decoded;
     Status status = encode_animation(clips, mesh.positions, seed.settings, stream, nullptr, &reconstruction);
-    StreamContent content;
-    if (status.ok() && seed.weight_contexts)
+    if (status.ok() && seed.force_weight_contexts) {
+      StreamContent content;
       status = read_stream(stream.data(), stream.size(), mesh.positions, content);
-    if (status.ok() && seed.weight_contexts) {
-      if (content.weight_cluster.empty()) status = Status(StatusCode::internal, "no extra weights");
-      content.flags |= format::kFlagWeightContexts;
-      stream.clear();
-      write_stream(content, mesh.positions, stream);
+      if (status.ok() && content.weight_cluster.empty()) status = Status(StatusCode::internal, "no extra weights");
+      if (status.ok()) {
+        content.flags |= format::kFlagWeightContexts;
+        stream.clear();
+        write_stream(content, mesh.positions, stream);
+      }
     }
     const bool version_3 = seed.settings.frame_references || seed.settings.motion_contexts ||
-                           seed.settings.weight_contexts || seed.weight_contexts;
+                           seed.settings.weight_contexts || seed.force_weight_contexts;
     const int version = version_3 ? 3 : seed.settings.table_residuals ? 2 : 1;
     if (status.ok() && (stream.size() < 5 || stream[4] != version))
       status = Status(StatusCode::internal, "not a version-" + std::to_string(version) + " stream");
