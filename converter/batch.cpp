@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -24,9 +25,16 @@ namespace fs = std::filesystem;
 constexpr int kMaxChildren = 256;
 std::atomic<pid_t> children[kMaxChildren];
 
+// Passes the signal on and waits for the children to end (they remove their temporary files; one in a long fsync
+// may take a while) before ending the batch the same way: when the batch has ended, none of its files is left being
+// written. kill and waitpid are async-signal-safe.
 extern "C" void pass_signal_to_children(int signal_number) {
   for (int c = 0; c < kMaxChildren; ++c)
     if (const pid_t pid = children[c].load()) kill(pid, signal_number);
+  for (int c = 0; c < kMaxChildren; ++c)
+    if (const pid_t pid = children[c].load())
+      while (waitpid(pid, nullptr, 0) < 0 && errno == EINTR) {
+      }
   std::signal(signal_number, SIG_DFL);
   std::raise(signal_number);
 }
@@ -116,8 +124,19 @@ int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, i
       while (children[child.slot].load() != 0) ++child.slot;  // a free slot: fewer run than there are slots
       std::fflush(stdout);
       std::fflush(stderr);
+      // The signals are held from the fork until the child is in `children`: a signal that came in between would
+      // find the new child unknown, end the batch and leave it running, writing its file alone (seen under ASan,
+      // whose fork is slow). The child lets them through once its own handlers are back.
+      sigset_t held, before;
+      sigemptyset(&held);
+      sigaddset(&held, SIGINT);
+      sigaddset(&held, SIGTERM);
+      sigprocmask(SIG_BLOCK, &held, &before);
       child.pid = child.report ? fork() : -1;
       if (child.pid == 0) {
+        sigaction(SIGINT, &previous_interrupt, nullptr);
+        sigaction(SIGTERM, &previous_terminate, nullptr);
+        sigprocmask(SIG_SETMASK, &before, nullptr);
         dup2(fileno(child.report), STDOUT_FILENO);
         CommandLine one = options;
         one.inputs = {files[child.file].input};
@@ -127,21 +146,22 @@ int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, i
         // The cores are shared by the files running at once (unless --threads says otherwise).
         if (one.encode.threads == 0)
           one.encode.threads = std::max<size_t>(1, std::thread::hardware_concurrency() / jobs);
-        sigaction(SIGINT, &previous_interrupt, nullptr);
-        sigaction(SIGTERM, &previous_terminate, nullptr);
         const int code = single(one);
         std::fflush(stdout);
         std::fflush(stderr);
         _exit(code);
       }
       if (child.pid < 0) {  // no process: the file fails, the others go on
-        reports[child.file] = "segmorph: error: " + files[child.file].input + ": cannot start a process: " +
-                              std::strerror(errno) + "\n";
+        const int error = errno;
+        sigprocmask(SIG_SETMASK, &before, nullptr);
+        reports[child.file] =
+            "segmorph: error: " + files[child.file].input + ": cannot start a process: " + std::strerror(error) + "\n";
         if (child.report) std::fclose(child.report);
         done[child.file] = true, ++failed;
         continue;
       }
       children[child.slot].store(child.pid);
+      sigprocmask(SIG_SETMASK, &before, nullptr);
       running.push_back(child);
     }
     if (!running.empty()) {

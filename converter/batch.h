@@ -22,8 +22,8 @@ bool plan_batch(const std::vector<std::string>& inputs, const std::string& direc
 
 // Creates `options.output_directory`, then runs `single` on every file (with the file's input, output and label) in up
 // to `options.jobs` child processes. Prints each file's report (the child's stdout) in input order, then one summary
-// line ({"files":N,"failed":M} with --json). SIGINT and SIGTERM are passed on to the children. Returns 0 when every
-// file succeeded, 1 otherwise.
+// line ({"files":N,"failed":M} with --json). SIGINT and SIGTERM are passed on to the children, and the batch ends
+// with the signal once they have ended. Returns 0 when every file succeeded, 1 otherwise.
 int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, int (*single)(const CommandLine&));
 
 }  // namespace segmorph

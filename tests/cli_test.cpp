@@ -431,6 +431,22 @@ TEST(Cli, OutputThatIsTheInputIsRefusedWithoutForce) {
 
 // Runs segmorph with `arguments`, sends it `signal_number` after `delay_ms` and returns its wait status (-1 when it
 // could not be started or waited for).
+// How many processes have `argument` among their command-line arguments (zombies have none).
+int processes_with_argument(const std::string& argument) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream file(entry.path() / "cmdline", std::ios::binary);
+    for (std::string word; std::getline(file, word, '\0');)
+      if (word == argument) {
+        ++count;
+        break;
+      }
+  }
+  return count;
+}
+
 int signal_after(const std::vector<std::string>& arguments, int delay_ms, int signal_number) {
   std::vector<const char*> argv = {SEGMORPH_BINARY};
   for (const std::string& argument : arguments) argv.push_back(argument.c_str());
@@ -1289,8 +1305,11 @@ TEST(Cli, StandardInputAndOutput) {
   EXPECT_EQ(run("verify -q - -").exit_code, 2);
 }
 
-// SIGTERM to a batch reaches the files being written: none is left half written or as a temporary file, and no
-// process of the batch outlives it. (Ctrl-C reaches the whole process group anyway.)
+// SIGTERM to a batch reaches the files being written: when the batch has ended, none is left half written or as a
+// temporary file, and no process of the batch outlives it. (Ctrl-C reaches the whole process group anyway.) The
+// batch waits for its children: a test that gave them 300 ms failed in CI, where a child's temporary file was still
+// there (a child in a long fsync under load). The batch's processes are found by the output folder in their command
+// lines.
 // At 480 frames per second the batch takes about 0.4 s (at 120 it ended within 62 ms on an idle machine, before the
 // first signal).
 TEST(Cli, SignalsStopABatchCleanly) {
@@ -1304,7 +1323,7 @@ TEST(Cli, SignalsStopABatchCleanly) {
         {"bake", "-q", fox, rigged, "--output-dir", outputs, "--fps", "480", "--jobs", "2"}, delay_ms, SIGTERM);
     ASSERT_GE(status, 0);
     interrupted += WIFSIGNALED(status);
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // children that were told to stop have stopped
+    EXPECT_EQ(processes_with_argument(outputs), 0) << "a process of the batch outlived it";
     if (fs::exists(outputs))
       for (const auto& entry : fs::directory_iterator(outputs)) {
         const std::string name = entry.path().filename();
