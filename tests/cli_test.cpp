@@ -429,8 +429,6 @@ TEST(Cli, OutputThatIsTheInputIsRefusedWithoutForce) {
   EXPECT_EQ(hidden, 0u);
 }
 
-// Runs segmorph with `arguments`, sends it `signal_number` after `delay_ms` and returns its wait status (-1 when it
-// could not be started or waited for).
 // How many processes have `argument` among their command-line arguments (zombies have none).
 int processes_with_argument(const std::string& argument) {
   int count = 0;
@@ -447,6 +445,8 @@ int processes_with_argument(const std::string& argument) {
   return count;
 }
 
+// Runs segmorph with `arguments`, sends it `signal_number` after `delay_ms` and returns its wait status (-1 when it
+// could not be started or waited for).
 int signal_after(const std::vector<std::string>& arguments, int delay_ms, int signal_number) {
   std::vector<const char*> argv = {SEGMORPH_BINARY};
   for (const std::string& argument : arguments) argv.push_back(argument.c_str());
@@ -1310,8 +1310,8 @@ TEST(Cli, StandardInputAndOutput) {
 // batch waits for its children: a test that gave them 300 ms failed in CI, where a child's temporary file was still
 // there (a child in a long fsync under load). The batch's processes are found by the output folder in their command
 // lines.
-// At 480 frames per second the batch takes about 0.4 s (at 120 it ended within 62 ms on an idle machine, before the
-// first signal).
+// At 480 frames per second the batch takes 0.15-0.2 s in Release on an idle machine, more under the sanitizers (at 120
+// it ended within 62 ms, before the first signal).
 TEST(Cli, SignalsStopABatchCleanly) {
   const std::string directory = output_directory("batch_signals");
   int interrupted = 0;
