@@ -16,7 +16,6 @@
 // The coder itself spends less than the zeroth-order price of today's scheme (its spatial prediction, contexts and
 // frame references): the stream's residual bytes are printed beside it.
 //   trajectory_space FILE [--error E] [--basis-bits B]
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -24,16 +23,10 @@
 #include <string>
 #include <vector>
 
-#include "codec.h"
-#include "gltf_io.h"
-#include "reconstruction.h"
-#include "sample.h"
-#include "sample_first_animated.h"
-#include "stand_in_base.h"
-#include "stream.h"
+#include "residual_trajectories.h"
 
 using namespace segmorph;
-using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using bench::Matrix;
 
 namespace {
 
@@ -182,39 +175,16 @@ int main(int argc, char** argv) {
     else
       return std::fprintf(stderr, "trajectory_space: unknown option %s\n", argv[i]), 2;
   }
-  SampledNode node;
-  Status status = bench::sample_first_animated(argv[1], node);
-  std::vector<FrameSequence> clips;
-  std::vector<float> base;
-  std::vector<uint8_t> stream;
-  StreamReport report;
-  StreamContent content;
-  if (status.ok()) {
-    clips = node.primitives[0].clips;
-    base = bench::stand_in_base(clips[0]);
-    status = encode_animation(clips, base, settings, stream, &report);
-  }
-  if (status.ok()) status = read_stream(stream.data(), stream.size(), base, content);
+  bench::ResidualTrajectories t;
+  const Status status = bench::residual_trajectories(argv[1], settings, t);
   if (!status.ok()) {
     std::fprintf(stderr, "trajectory_space: %s: %s\n", argv[1], status.message().c_str());
     return 1;
   }
-  const size_t vertices = content.vertex_count, welded = content.welded_count, frames = content.frame_count();
-  const std::vector<double> predicted = predicted_frames(content, welded_base(base, content));
-  std::vector<uint32_t> first(welded, UINT32_MAX);
-  for (uint32_t v = 0; v < vertices; ++v)
-    if (first[content.welded_index[v]] == UINT32_MAX) first[content.welded_index[v]] = v;
-  // Trajectories: row w × 3 + axis, F columns, in units of the axis's step.
-  Matrix rows(Eigen::Index(welded * 3), Eigen::Index(frames));
-  size_t frame = 0;
-  for (const FrameSequence& clip : clips)
-    for (size_t f = 0; f < clip.frame_count; ++f, ++frame)
-      for (size_t w = 0; w < welded; ++w)
-        for (size_t axis = 0; axis < 3; ++axis)
-          rows(Eigen::Index(w * 3 + axis), Eigen::Index(frame)) =
-              (double(clip.positions[(f * vertices + first[w]) * 3 + axis]) -
-               predicted[(frame * welded + w) * 3 + axis]) /
-              double(content.residual_step[axis]);
+  const StreamContent& content = t.content;
+  const StreamReport& report = t.report;
+  const Matrix& rows = t.rows;
+  const size_t welded = content.welded_count, frames = content.frame_count();
 
   // Today's scheme, closed loop against the previous frame: the symbols per axis, the squared error per trajectory.
   double today_bits = 0, today_error = 0;

@@ -1,0 +1,71 @@
+// What the trajectory bench tools start from: a file's first animated primitive encoded as codec_sequence encodes it
+// (against the stand-in base mesh), and the open-loop residuals of the stream it wrote: each welded vertex's frames
+// minus the prediction of the stream's quantized motion and weights, one trajectory of F values per vertex and axis
+// (needs segmorph_gltf and Eigen).
+#pragma once
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "codec.h"
+#include "reconstruction.h"
+#include "sample_first_animated.h"
+#include "stand_in_base.h"
+#include "stream.h"
+
+namespace segmorph::bench {
+
+using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+struct ResidualTrajectories {
+  std::vector<FrameSequence> clips;
+  std::vector<float> base;
+  std::vector<uint8_t> stream;
+  StreamReport report;
+  StreamContent content;
+  Matrix rows;  // W × 3 rows (welded vertex w's axis a is row w × 3 + a), F columns, in units of the axis's step
+};
+
+inline Status residual_trajectories(const char* path, const CodecSettings& settings, ResidualTrajectories& out) {
+  SampledNode node;
+  Status status = sample_first_animated(path, node);
+  if (status.ok()) {
+    out.clips = node.primitives[0].clips;
+    out.base = stand_in_base(out.clips[0]);
+    status = encode_animation(out.clips, out.base, settings, out.stream, &out.report);
+  }
+  if (status.ok()) status = read_stream(out.stream.data(), out.stream.size(), out.base, out.content);
+  if (!status.ok()) return status;
+  const StreamContent& content = out.content;
+  const size_t vertices = content.vertex_count, welded = content.welded_count;
+  const std::vector<double> predicted = predicted_frames(content, welded_base(out.base, content));
+  std::vector<uint32_t> first(welded, UINT32_MAX);
+  for (uint32_t v = 0; v < vertices; ++v)
+    if (first[content.welded_index[v]] == UINT32_MAX) first[content.welded_index[v]] = v;
+  out.rows.resize(Eigen::Index(welded * 3), Eigen::Index(content.frame_count()));
+  size_t frame = 0;
+  for (const FrameSequence& clip : out.clips)
+    for (size_t f = 0; f < clip.frame_count; ++f, ++frame)
+      for (size_t w = 0; w < welded; ++w)
+        for (size_t axis = 0; axis < 3; ++axis)
+          out.rows(Eigen::Index(w * 3 + axis), Eigen::Index(frame)) =
+              (double(clip.positions[(f * vertices + first[w]) * 3 + axis]) -
+               predicted[(frame * welded + w) * 3 + axis]) /
+              double(content.residual_step[axis]);
+  return status;
+}
+
+// Today's residual scheme on one trajectory (each value quantized to whole steps against the previous value's
+// reconstruction, the stream's closed loop without frame references): its squared error, in steps².
+inline double closed_loop_error(const Matrix& rows, Eigen::Index row) {
+  double reconstructed = 0, error = 0;
+  for (Eigen::Index f = 0; f < rows.cols(); ++f) {
+    reconstructed += std::round(rows(row, f) - reconstructed);
+    error += (rows(row, f) - reconstructed) * (rows(row, f) - reconstructed);
+  }
+  return error;
+}
+
+}  // namespace segmorph::bench
