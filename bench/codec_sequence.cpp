@@ -4,7 +4,7 @@
 //   codec_sequence FILE [--error E | --bpvf R | --lossless] [--clusters K] [--no-temporal] [--no-blend]
 //                       [--no-spatial] [--no-frame-references] [--no-curvature-refinement]
 //                       [--level-curve-refinement] [--choose-segmentation] [--no-motion-refinement]
-//                       [--fast-decode]
+//                       [--fast-decode] [--no-transform]
 // Prints one line: clusters, E(Π) before and after refinement, stream bytes (motion / residuals), bits per
 // vertex per frame of the stream alone, KG error and RMSE of the decoded frames, encoder and decoder
 // milliseconds, and whether the decoder reproduced the encoder's reconstruction exactly.
@@ -58,6 +58,8 @@ int main(int argc, char** argv) {
       settings.motion_refinement = false;
     else if (arg == "--fast-decode")
       settings.table_residuals = true;
+    else if (arg == "--no-transform")
+      settings.transform_residuals = false;
     else {
       std::fprintf(stderr, "codec_sequence: unknown option %s\n", arg.c_str());
       return 2;

@@ -47,6 +47,10 @@ struct CodecSettings {
   // Beyond the paper: the residuals in the table code of stream version 2 (table_residual_coding.h), which decodes
   // faster and costs more bytes than the adaptive code. Lossy modes only.
   bool table_residuals = false;
+  // Beyond the paper: the residuals as temporal bases and coefficients (stream version 4, transform_coding.h) where
+  // that takes fewer bytes than the residual loop at no more KG error. Error targets (RateMode::error) only, and not
+  // with table_residuals.
+  bool transform_residuals = true;
   // Bytes of the output outside this stream (the base mesh, the container) that a bpvf target includes.
   size_t outside_bytes = 0;
   // Threads for the stages that split their work (parallel.h); 0: every hardware thread. The stream is the same

@@ -51,12 +51,29 @@ FrameLoop::FrameLoop(const StreamContent& content, const std::vector<float>& bas
       predictions_(2 * row_),
       symbols_(2 * row_),
       welded_frames_(2 * row_),
-      to_vertices_(content.welded_index) {}
+      to_vertices_(content.welded_index) {
+  if (!content.transform) return;
+  status_ = transform_coefficients(content, traversal_, coefficients_);
+  if (!status_.ok()) return;
+  transform_ = std::make_unique<TransformResiduals>(content, coefficients_);
+  transform_row_.resize(row_);
+}
 
 void FrameLoop::start_clip() { reconstructor_.start_clip(); }
 
 Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two) {
   const size_t count = two ? 2 : 1;
+  if (transform_) {  // version 4: x = float(p + r), r the frame's residual from the coefficients
+    for (size_t s = 0; s < count; ++s) {
+      const double* p = &predictions_[s * row_];
+      predictor_.predict(frame + s, &predictions_[s * row_]);
+      transform_->frame(frame + s, transform_row_.data());
+      float* to = &welded_frames_[s * row_];
+      for (size_t i = 0; i < row_; ++i) to[i] = float(p[i] + transform_row_[i]);
+      if (!finite(s)) return not_finite();
+    }
+    return Status::Ok();
+  }
   for (size_t s = 0; s < count; ++s) {
     predictor_.predict(frame + s, &predictions_[s * row_]);
     SEGMORPH_RETURN_IF_ERROR(residuals(frame + s, &symbols_[s * row_]));
@@ -120,6 +137,12 @@ Status FrameDecoder::open(const uint8_t* data, size_t size, const std::vector<fl
                                             " frames, more than its " + std::to_string(size) + " bytes can hold");
   }
   loop_ = std::make_unique<FrameLoop>(content_, base, triangles);
+  if (!loop_->status().ok()) {
+    const Status failed = loop_->status();
+    loop_.reset();
+    reader_.reset();
+    return failed;
+  }
   StreamReader* reader = reader_.get();
   residuals_ = [reader](size_t, int64_t* row) { return reader->read_frame(row); };
   checkpoints_.resize(content_.clip_frames.size());
@@ -237,9 +260,10 @@ Status collect_clips(const StreamContent& content, BeginClip begin_clip, Append 
 Status reconstruct_clips(const StreamContent& content, const std::vector<float>& base,
                          const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
   const size_t row = size_t(content.welded_count) * 3;
-  if (content.residuals.size() != content.frame_count() * row)
+  if (!content.transform && content.residuals.size() != content.frame_count() * row)
     return Status(StatusCode::invalid_argument, "stream content has the wrong number of residuals");
   FrameLoop loop(content, base, triangles);
+  SEGMORPH_RETURN_IF_ERROR(loop.status());
   const FrameLoop::Residuals copy = [&](size_t frame, int64_t* to) {
     std::copy_n(content.residuals.begin() + ptrdiff_t(frame * row), row, to);
     return Status::Ok();

@@ -19,6 +19,7 @@
 #include "segmentation.h"
 #include "stream_format.h"
 #include "topology.h"
+#include "transform_coding.h"
 
 namespace segmorph {
 namespace {
@@ -158,6 +159,38 @@ std::vector<FrameSequence> shaped_like(const std::vector<FrameSequence>& clips) 
   return shaped;
 }
 
+// Version 4: the residual loop's stream replaced by the transform section's where that is smaller at no more squared
+// error (transform_coding.h).
+void try_transform(const EncodeProblem& problem, const StreamContent& content, std::vector<uint8_t>& stream,
+                   std::vector<FrameSequence>& restored, StreamReport& report) {
+  const auto start = EncodeClock::now();
+  report_progress(problem.settings, "transform residuals");
+  double budget = 0;
+  for (size_t c = 0; c < restored.size(); ++c)
+    for (size_t i = 0; i < restored[c].positions.size(); ++i) {
+      const double d = double(problem.clips[c].positions[i]) - double(restored[c].positions[i]);
+      budget += d * d;
+    }
+  StreamContent transformed;
+  std::vector<uint8_t> candidate;
+  std::vector<FrameSequence> frames;
+  if (transform_content(problem, content, budget, transformed, candidate, frames) && candidate.size() < stream.size()) {
+    StreamSizes sizes;
+    stream.clear();
+    write_stream(transformed, problem.base, stream, &sizes);
+    for (size_t c = 0; c < frames.size(); ++c) frames[c].times = restored[c].times;
+    restored = std::move(frames);
+    report.bytes_motion = sizes.motion;
+    report.bytes_residuals = sizes.residuals;
+    report.bytes_total = stream.size();
+    ErrorAccumulator accumulator;
+    for (size_t c = 0; c < restored.size(); ++c) accumulator.add(problem.clips[c], restored[c]);
+    report.kg_percent = accumulator.result().kg_percent;
+    for (double& step : report.residual_steps) step = 0;
+  }
+  report.ms_entropy += milliseconds_since(start);
+}
+
 }  // namespace
 
 Status encode_animation(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
@@ -197,10 +230,12 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   // Motion and residual steps, residual symbols, the stream; the decoder's frames and their KG error.
   std::vector<FrameSequence> restored = shaped_like(clips);
   code_stream(problem, clusters, fitted, content, report, stream, restored);
-  content = StreamContent();  // its residual symbols are as large as the frames
   ErrorAccumulator accumulator;
   for (size_t c = 0; c < clips.size(); ++c) accumulator.add(clips[c], restored[c]);
   report.kg_percent = accumulator.result().kg_percent;
+  if (settings.transform_residuals && settings.mode == RateMode::error && !settings.table_residuals)
+    try_transform(problem, content, stream, restored, report);
+  content = StreamContent();  // its residual symbols are as large as the frames
   if (reconstruction) *reconstruction = std::move(restored);
   if (report_out) *report_out = report;
   return Status::Ok();

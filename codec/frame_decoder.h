@@ -13,6 +13,7 @@
 #include "reconstruction.h"
 #include "segmorph/status.h"
 #include "stream.h"
+#include "transform_residuals.h"
 #include "vertex_gather.h"
 
 namespace segmorph {
@@ -25,9 +26,12 @@ class FrameLoop {
   using Residuals = std::function<Status(size_t frame, int64_t* row)>;
 
   // content must outlive the loop; base (V × 3) and triangles (T × 3 indices into V) are read by the constructor.
+  // Check status() before decoding: version 4's coefficients are made from the traversal here, and can be bad.
   FrameLoop(const StreamContent& content, const std::vector<float>& base, const std::vector<uint32_t>& triangles);
   FrameLoop(const FrameLoop&) = delete;
   FrameLoop& operator=(const FrameLoop&) = delete;
+
+  const Status& status() const { return status_; }
 
   // Starts a clip: its first frame has no reference.
   void start_clip();
@@ -57,6 +61,11 @@ class FrameLoop {
   std::vector<int64_t> symbols_;
   std::vector<float> welded_frames_;
   VertexGather to_vertices_;  // welded frames into the base mesh's vertex order
+  // Version 4: the residuals from the coefficients instead of the residual loop (the symbols are not read).
+  TransformCoefficients coefficients_;
+  std::unique_ptr<TransformResiduals> transform_;
+  std::vector<double> transform_row_;
+  Status status_;
 };
 
 // A stream decoded frame by frame in stream order (clip after clip), with the frames written where the caller says:

@@ -37,6 +37,10 @@ struct Models {
   // previous welded vertex, and each extra cluster as its place among its own cluster's recent extras.
   std::array<BitTreeModel, 4> extra_count_contexts{BitTreeModel(2), BitTreeModel(2), BitTreeModel(2), BitTreeModel(2)};
   BitTreeModel recent_place{3};  // 0 .. kRecentWeightClusters − 1, or kRecentWeightClusters: the index follows
+  // Version 4: the transform section (code_transform).
+  BitTreeModel basis_source{2};
+  SignedModel basis_entry;  // differences along time
+  std::array<SignedModel, format::kCoefficientModels> coefficient;
   // The residuals' models are residual_coding.cpp's.
 };
 
@@ -288,6 +292,85 @@ Status code_head(Coder& coder, Models& models, const std::vector<float>& base, S
   return Status::Ok();
 }
 
+// Version 4: `vectors` basis vectors of `frames` entries each, appended to `basis`: per vector its step, then its
+// entries as differences along time (from 0 before the first). `entries` counts the entries of all bases so far.
+template <class Coder>
+Status code_basis(Coder& coder, Models& models, size_t frames, size_t vectors, StreamContent::Basis& basis,
+                  uint64_t& entries) {
+  for (size_t i = 0; i < vectors; ++i) {
+    entries += frames;
+    if (entries > format::kMaxBasisEntries) return corrupt("too many basis entries");
+    coder.grow(basis.step, i + 1);
+    coder.float_bits(basis.step[i]);
+    if (!(basis.step[i] > 0) || !std::isfinite(basis.step[i])) return corrupt("bad basis step");
+    coder.grow(basis.entries, (i + 1) * frames);
+    int64_t previous = 0;
+    for (size_t f = 0; f < frames; ++f) {
+      int32_t& entry = basis.entries[i * frames + f];
+      // The writer's entries lie within ±kMaxTransformValue: the difference fits; the reader's is overwritten.
+      int32_t difference = int32_t(int64_t(entry) - previous);
+      coder.integer(models.basis_entry, difference);
+      previous += difference;
+      if (previous < -format::kMaxTransformValue || previous > format::kMaxTransformValue)
+        return corrupt("basis entry out of range");
+      if (Coder::kReading) entry = int32_t(previous);
+    }
+    if (coder.failed()) return coder.status();
+  }
+  return Status::Ok();
+}
+
+// Version 4's transform section (spec/bitstream.md, 5.9): the stream's basis; per cluster its basis's source, size,
+// coefficient step and (its own) vectors; then the coefficients' symbols, cluster by cluster, vector by vector, axis
+// by axis, the cluster's welded vertices ascending, in a model per vector (the first kCoefficientModels − 1, then
+// one for the rest). The symbols grow a block at a time as the data proves to be there.
+template <class Coder>
+Status code_transform(Coder& coder, Models& models, StreamContent& content) {
+  const size_t frames = content.frame_count(), clusters = content.cluster_count;
+  uint32_t stream_vectors = uint32_t(content.stream_basis.size());
+  coder.count(models.count, stream_vectors);
+  if (coder.failed()) return coder.status();
+  if (stream_vectors > frames) return corrupt("bad basis size");
+  uint64_t entries = 0;
+  SEGMORPH_RETURN_IF_ERROR(code_basis(coder, models, frames, stream_vectors, content.stream_basis, entries));
+  std::vector<std::vector<uint32_t>> members(clusters);
+  for (uint32_t w = 0; w < content.welded_count; ++w) members[content.labels[w]].push_back(w);
+  uint64_t coefficients = 0;
+  for (size_t k = 0; k < clusters; ++k) {
+    coder.grow(content.basis_source, k + 1);
+    coder.grow(content.basis_size, k + 1);
+    coder.grow(content.coefficient_step, k + 1);
+    coder.grow(content.own_basis, k + 1);
+    coder.tree(models.basis_source, content.basis_source[k]);
+    if (coder.failed()) return coder.status();
+    const uint32_t source = content.basis_source[k];
+    if (source > format::kBasisOwn) return corrupt("bad basis source");
+    if (source == format::kBasisNone) continue;
+    coder.count(models.count, content.basis_size[k]);
+    const uint32_t size = content.basis_size[k];
+    if (coder.failed() || size == 0 || size > (source == format::kBasisStream ? stream_vectors : frames))
+      return corrupt("bad basis size");
+    coder.float_bits(content.coefficient_step[k]);
+    if (!(content.coefficient_step[k] > 0) || !std::isfinite(content.coefficient_step[k]))
+      return corrupt("bad coefficient step");
+    if (source == format::kBasisOwn)
+      SEGMORPH_RETURN_IF_ERROR(code_basis(coder, models, frames, size, content.own_basis[k], entries));
+    coefficients += uint64_t(size) * 3 * members[k].size();
+    if (coefficients > format::kMaxTransformCoefficients) return corrupt("too many coefficients");
+  }
+  size_t at = 0;
+  for (size_t k = 0; k < clusters; ++k)
+    for (uint32_t i = 0; i < content.basis_size[k]; ++i) {
+      SignedModel& model = models.coefficient[std::min<size_t>(i, format::kCoefficientModels - 1)];
+      for (int axis = 0; axis < 3; ++axis) {
+        coder.grow(content.coefficient_symbols, at + members[k].size());
+        for (size_t j = 0; j < members[k].size(); ++j) coder.integer(model, content.coefficient_symbols[at++]);
+        if (coder.failed()) return coder.status();
+      }
+    }
+  return Status::Ok();
+}
+
 // The residual quantizer steps, one per axis (lossless streams: not used). The encoder writes streams without
 // residuals only to measure everything else (their steps are not chosen yet): the writer checks the steps of a stream
 // that has residuals, the reader those of every stream.
@@ -362,7 +445,11 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   assert(!references || content.references.size() == content.frame_count());
   const bool version_3 = content.flags & (format::kFlagFrameReferences | format::kFlagMotionContexts |
                                           format::kFlagLinearMotion | format::kFlagWeightContexts);
-  out.push_back(version_3 ? format::kReferenceVersion : table ? format::kTableVersion : format::kVersion);
+  assert(!content.transform || !(content.flags & format::kResidualLoopFlags));
+  out.push_back(content.transform ? format::kTransformVersion
+                : version_3       ? format::kReferenceVersion
+                : table           ? format::kTableVersion
+                                  : format::kVersion);
   out.push_back(content.flags);
   const size_t length_at = out.size();
   out.insert(out.end(), 4, 0);  // body length, filled in at the end
@@ -374,6 +461,18 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   Status status = code_head(writer, models, base, fields);
   assert(status.ok());
   const size_t motion_end = out.size();
+  if (content.transform) {
+    status = code_transform(writer, models, fields);
+    assert(status.ok());
+    encoder.finish();
+    const uint32_t length = uint32_t(out.size() - length_at - 4);
+    for (int i = 0; i < 4; ++i) out[length_at + size_t(i)] = uint8_t(length >> (8 * i));
+    if (sizes) {
+      sizes->motion = motion_end - start;
+      sizes->residuals = out.size() - motion_end;
+    }
+    return;
+  }
   status = code_residual_steps(writer, fields);
   assert(status.ok());
   (void)status;
@@ -420,14 +519,19 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
                                                " (this decoder reads versions " + std::to_string(format::kVersion) +
                                                " to " + std::to_string(format::kNewestVersion) + ")");
   content.flags = data[5];
-  const uint8_t known = version == format::kVersion        ? format::kKnownFlags
-                        : version == format::kTableVersion ? format::kKnownTableVersionFlags
-                                                           : format::kKnownReferenceVersionFlags;
+  content.transform = version == format::kTransformVersion;
+  const uint8_t known = version == format::kVersion            ? format::kKnownFlags
+                        : version == format::kTableVersion     ? format::kKnownTableVersionFlags
+                        : version == format::kReferenceVersion ? format::kKnownReferenceVersionFlags
+                                                               : format::kKnownTransformVersionFlags;
+  if (content.transform && (content.flags & format::kResidualLoopFlags))
+    return Status(StatusCode::bad_data, "animation stream: residual loop flags in a version 4 stream");
   if (content.flags & ~known) return Status(StatusCode::bad_data, "animation stream has unknown flags");
   const bool table = content.flags & format::kFlagTableResiduals;
   if (table && (content.flags & format::kFlagLossless))
     return Status(StatusCode::bad_data, "animation stream: the table residual code in a lossless stream");
-  if ((content.flags & format::kFlagFrameReferences) && !(content.flags & format::kFlagTemporalResiduals))
+  if (!content.transform && (content.flags & format::kFlagFrameReferences) &&
+      !(content.flags & format::kFlagTemporalResiduals))
     return Status(StatusCode::bad_data, "animation stream: frame references without temporal residuals");
   if ((content.flags & format::kFlagLinearMotion) && !(content.flags & format::kFlagMotionContexts))
     return Status(StatusCode::bad_data, "animation stream: linear motion without motion contexts");
@@ -446,6 +550,10 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
   Models models;
   HeadReader reader{decoder};
   SEGMORPH_RETURN_IF_ERROR(code_head(reader, models, base, content));
+  if (content.transform) {  // the whole body: the frames need nothing more from the stream
+    SEGMORPH_RETURN_IF_ERROR(code_transform(reader, models, content));
+    return decoder.finish();
+  }
   SEGMORPH_RETURN_IF_ERROR(code_residual_steps(reader, content));
   const bool lossless = content.flags & format::kFlagLossless;
   if (table) {
@@ -458,6 +566,7 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
 }
 
 Status StreamReader::read_frame(int64_t* row) {
+  if (content_->transform) return Status::Ok();  // no residual symbols: read_head read the whole body
   assert(residuals_ || table_residuals_);
   if (table_residuals_) {
     table_residuals_->decode_frame(*decoder_, row);
@@ -480,6 +589,8 @@ size_t StreamReader::frame_bound() const {
   assert(decoder_ && content_ && content_->welded_count > 0);
   // In 64 bits: a size_t of 32 bits would wrap for streams of a few megabytes.
   uint64_t vertex_frames;
+  // Version 4: read_head read every symbol; the motion's F × K × 12 of them proved the frame count.
+  if (content_->transform) return content_->frame_count();
   if (table_residuals_) {
     vertex_frames = uint64_t(size_ - format::kHeaderBytes - body_size_) * table_code::kVertexFramesPerByte;
   } else {
@@ -499,10 +610,12 @@ struct StreamReader::Checkpoint {
 void StreamReader::CheckpointDeleter::operator()(Checkpoint* checkpoint) const { delete checkpoint; }
 
 StreamReader::CheckpointPointer StreamReader::checkpoint() const {
-  assert(decoder_ && (residuals_ || table_residuals_));
+  assert(decoder_ && (residuals_ || table_residuals_ || content_->transform));
   CheckpointPointer checkpoint(new Checkpoint);
   checkpoint->range = decoder_->state();
-  if (table_residuals_) {
+  if (content_->transform) {  // nothing moves after the head
+    checkpoint->bytes = sizeof(Checkpoint);
+  } else if (table_residuals_) {
     checkpoint->table = table_residuals_->position();
     checkpoint->bytes = sizeof(Checkpoint) + checkpoint->table.history.size();
   } else {
@@ -513,9 +626,11 @@ StreamReader::CheckpointPointer StreamReader::checkpoint() const {
 }
 
 void StreamReader::restore(const Checkpoint& checkpoint) {
-  assert(decoder_ && (residuals_ || table_residuals_));
+  assert(decoder_ && (residuals_ || table_residuals_ || content_->transform));
   decoder_->restore(checkpoint.range);
-  if (table_residuals_)
+  if (content_->transform)
+    return;
+  else if (table_residuals_)
     table_residuals_->restore(checkpoint.table);
   else
     residuals_ = std::make_unique<ResidualDecoder>(*checkpoint.residuals);
@@ -539,6 +654,7 @@ Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& b
   SEGMORPH_RETURN_IF_ERROR(reader.read_head(base, content));
   // The residuals grow a frame at a time as the data proves to be there (a few bytes of stream can claim
   // gigabytes of frames).
+  if (content.transform) return reader.finish();
   const size_t row = size_t(content.welded_count) * 3, frames = content.frame_count();
   content.residuals.reserve(frames_to_reserve(frames, reader.frame_bound(), row * sizeof(int64_t)) * row);
   for (size_t f = 0; f < frames; ++f) {

@@ -49,6 +49,23 @@ struct StreamContent {
   // in (INT32_MIN, INT32_MAX]). write_stream codes whichever is not empty; read_stream fills `residuals`.
   std::vector<int32_t> narrow_residuals;
 
+  // Version 4 (`transform`): the residuals as temporal bases and coefficients instead (spec/bitstream.md, 5.9;
+  // the residual fields above are then unused). A basis's vector i has entry f = entries[i × F + f] × step[i].
+  bool transform = false;
+  struct Basis {
+    std::vector<float> step;
+    std::vector<int32_t> entries;
+    size_t size() const { return step.size(); }
+  };
+  Basis stream_basis;
+  std::vector<uint32_t> basis_source;   // K: format::kBasis*
+  std::vector<uint32_t> basis_size;     // K: m, the vectors of its basis the cluster uses (0 with kBasisNone)
+  std::vector<float> coefficient_step;  // K: the cluster's coefficients are multiples of it
+  std::vector<Basis> own_basis;         // K: with kBasisOwn, the cluster's m vectors
+  // Per cluster with a basis, per vector i < m, per axis, per welded vertex of the cluster ascending: the
+  // coefficient's index minus its prediction from earlier neighbours (transform_coefficients() in reconstruction.h).
+  std::vector<int32_t> coefficient_symbols;
+
   size_t frame_count() const;
 };
 

@@ -15,10 +15,15 @@ constexpr uint8_t kMagic[4] = {'S', 'G', 'M', 'A'};
 // and kFlagLinearMotion (the motion predicted from the two frames before), and kFlagWeightContexts (each vertex's
 // extra clusters coded as places among the clusters recently blended into its own cluster's vertices). The encoder
 // writes version 3 only when it sets one of them, which it does where they pay.
+// Version 4 codes the residuals as temporal bases and coefficients (the transform section) instead of residual
+// symbols: the flags are version 3's, less the four of the residual loop (LOSSLESS, TEMPORAL, SPATIAL, TABLE), which
+// must be clear; REFERENCES no longer needs TEMPORAL (the motion still uses the references). The encoder writes it
+// where it measures a smaller stream than the residual loop's at no more error.
 constexpr uint8_t kVersion = 1;
 constexpr uint8_t kTableVersion = 2;
 constexpr uint8_t kReferenceVersion = 3;  // frame references and linear motion
-constexpr uint8_t kNewestVersion = kReferenceVersion;
+constexpr uint8_t kTransformVersion = 4;  // the residuals as temporal bases and coefficients
+constexpr uint8_t kNewestVersion = kTransformVersion;
 constexpr size_t kHeaderBytes = 10;  // magic, version, flags, body length (u32, little endian); the body follows
 
 // Flags byte.
@@ -34,6 +39,15 @@ constexpr uint8_t kKnownFlags = kFlagLossless | kFlagTemporalResiduals | kFlagSp
 constexpr uint8_t kKnownTableVersionFlags = kKnownFlags | kFlagTableResiduals;                   // version 2
 constexpr uint8_t kKnownReferenceVersionFlags = kKnownTableVersionFlags | kFlagFrameReferences | kFlagMotionContexts |
                                                 kFlagLinearMotion | kFlagWeightContexts;  // version 3
+constexpr uint8_t kResidualLoopFlags =
+    kFlagLossless | kFlagTemporalResiduals | kFlagSpatialResiduals | kFlagTableResiduals;  // clear in version 4
+constexpr uint8_t kKnownTransformVersionFlags = kKnownReferenceVersionFlags & ~kResidualLoopFlags;  // version 4
+
+// Version 4: where each cluster's basis comes from.
+constexpr uint32_t kBasisNone = 0;           // the cluster's residuals are zero
+constexpr uint32_t kBasisStream = 1;         // the first m vectors of the stream's basis
+constexpr uint32_t kBasisOwn = 2;            // m vectors of its own
+constexpr uint32_t kCoefficientModels = 16;  // the coefficients of vector i are coded in model min(i, 15)
 
 // Limits a decoder enforces before allocating (a stream claiming more is refused as bad data).
 constexpr uint32_t kMaxClips = 4096;
@@ -49,5 +63,12 @@ constexpr uint32_t kMaxReferenceDistance = 255;  // version 3: a frame's referen
 // Version 3: a reference window above 1 times V is at most this, so that the residuals a decoder holds for the
 // window ((window + 2) × W × 3 doubles) stay within about 48 MiB plus the 3 frames any decoder holds.
 constexpr uint64_t kMaxReferenceWindowVertices = uint64_t(1) << 21;
+// Version 4: every basis entry and every coefficient lies within ±kMaxTransformValue (so that the entries'
+// differences fit 32 bits and every product and sum of the reconstruction is exact enough in binary64); the bases
+// hold at most kMaxBasisEntries entries in all (vectors × F: 128 MiB of doubles), the clusters at most
+// kMaxTransformCoefficients coefficients (512 MiB of int32).
+constexpr int64_t kMaxTransformValue = int64_t(1) << 30;
+constexpr uint64_t kMaxBasisEntries = uint64_t(1) << 24;
+constexpr uint64_t kMaxTransformCoefficients = uint64_t(1) << 27;
 
 }  // namespace segmorph::format

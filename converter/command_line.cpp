@@ -148,9 +148,10 @@ const Option kOptions[] = {
      "code the residuals for decoding speed (stream version 2, its table code): about a third less decoding time, "
      "files 1 to 11 % larger on the three classic sequences (docs/codec.md). Not with --lossless",
      [](CommandLine& line, const std::string&, double) { line.encode.fast_decode = true; }},
-    {"--max-stream-version", nullptr, "N", kEncode, Kind::whole, 1, 3, false, nullptr, 0,
-     "write animation streams of at most version N, {range} (default 3), for players whose decoder reads no later "
-     "one: version 3 adds frame references and the motion's and the weights' contexts, which the encoder uses only "
+    {"--max-stream-version", nullptr, "N", kEncode, Kind::whole, 1, 4, false, nullptr, 0,
+     "write animation streams of at most version N, {range} (default 4), for players whose decoder reads no later "
+     "one: version 3 adds frame references and the motion's and the weights' contexts, version 4 the residuals as "
+     "temporal bases and coefficients (with --error targets, not with --fast-decode), which the encoder uses only "
      "where they make a stream smaller; --fast-decode needs 2",
      [](CommandLine& line, const std::string&, double number) { line.encode.max_stream_version = int(number); }},
     {"--clusters", nullptr, "K", kEncode, Kind::whole, 1, 65535, false, nullptr, 0,
@@ -177,7 +178,9 @@ const Option kOptions[] = {
     {"--targets", nullptr, "MODE", kEncode, Kind::choice, 0, 0, false, "auto|keep|bake", 0,
      "what a morph-target mesh (unskinned, one node) stores. keep: its targets, compressed, played by its own "
      "weights animation; bake: its sampled frames, like a skinned mesh. auto (default): where a mesh has at most "
-     "half as many targets as frames, encode both ways and keep the smaller file (with --bpvf, the one with the "
+     "half as many targets as frames, encode both ways and keep the file smaller as a server sends it (an "
+     "estimate of its compressed size: the kept weights are floats that compress, the streams are not; with --bpvf, "
+     "the one with the "
      "smaller error); never keep them with --lossless (kept targets are lossy)",
      [](CommandLine& line, const std::string& text, double) {
        line.encode.targets = text == "auto"   ? EncodeSettings::Targets::automatic
@@ -191,8 +194,7 @@ const Option kOptions[] = {
      "fail (exit status 1) when COMPRESSED takes more than R bits per vertex per frame, {range}",
      [](CommandLine& line, const std::string&, double number) { line.max_bpvf = number; }},
     {"--json", nullptr, nullptr, kInfo | kEncode | kVerify, Kind::flag, 0, 0, false, nullptr, 0,
-     "print one JSON object instead of text",
-     [](CommandLine& line, const std::string&, double) { line.json = true; }},
+     "print one JSON object instead of text", [](CommandLine& line, const std::string&, double) { line.json = true; }},
     {"--quiet", "-q", nullptr, kEvery, Kind::flag, 0, 0, false, nullptr, 0, "no progress messages on stderr",
      [](CommandLine& line, const std::string&, double) { line.quiet = true; }},
     {"--help", "-h", nullptr, kEvery, Kind::flag, 0, 0, false, nullptr, 0, "this help",

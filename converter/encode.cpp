@@ -266,8 +266,8 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
 
 Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinygltf::Model& output,
                       EncodeReport& report, const Progress& progress) {
-  if (settings.max_stream_version < 1 || settings.max_stream_version > 3)
-    return Status(StatusCode::invalid_argument, "the stream version must be 1, 2 or 3");
+  if (settings.max_stream_version < 1 || settings.max_stream_version > 4)
+    return Status(StatusCode::invalid_argument, "the stream version must be 1 to 4");
   if (settings.fast_decode && settings.max_stream_version < 2)
     return Status(StatusCode::invalid_argument, "fast decoding writes stream version 2");
   EncodeChoices choices;
@@ -277,14 +277,16 @@ Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinyglt
   choices.codec.table_residuals = settings.fast_decode;
   choices.codec.frame_references = choices.codec.motion_contexts = choices.codec.weight_contexts =
       settings.max_stream_version >= 3;
+  choices.codec.transform_residuals = settings.max_stream_version >= 4;
   choices.codec.threads = settings.threads;
   choices.draco.position_bits = settings.position_bits;
   choices.draco.normal_bits = settings.normal_bits;
   choices.draco.texcoord_bits = settings.texcoord_bits;
   choices.keep_skins = settings.skins == EncodeSettings::Skins::keep;
   // Morph-target meshes that keep their targets are compressed where they are; the others are baked first. With
-  // --targets auto, a file where some mesh could keep them is encoded both ways; the smaller file is kept (with
-  // --bpvf, where both come to the target's size, the one with the smaller worst error).
+  // --targets auto, a file where some mesh could keep them is encoded both ways; the file smaller as delivered
+  // (glb_delivered_estimate) is kept (with --bpvf, where both come to the target's size, the one with the smaller
+  // worst error).
   std::vector<bool> keep(file.sampled.size());
   bool any_kept = false;
   for (size_t i = 0; i < file.sampled.size(); ++i)
@@ -302,15 +304,21 @@ Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinyglt
       encoded = std::move(baked), status = baked_status;
     } else if (status.ok() && baked_status.ok()) {
       const size_t kept_size = glb_size(encoded.model), baked_size = glb_size(baked.model);
+      const size_t kept_delivered = glb_delivered_estimate(encoded.model),
+                   baked_delivered = glb_delivered_estimate(baked.model);
       const double kept_kg = worst_kg(encoded.report), baked_kg = worst_kg(baked.report);
-      char line[160];
-      std::snprintf(line, sizeof(line), "morph targets kept: %zu bytes, KG %.4f %%; baked: %zu bytes, KG %.4f %%",
-                    kept_size, kept_kg, baked_size, baked_kg);
+      char line[200];
+      std::snprintf(line, sizeof(line),
+                    "morph targets kept: %zu bytes (about %zu compressed), KG %.4f %%; baked: %zu bytes (about %zu "
+                    "compressed), KG %.4f %%",
+                    kept_size, kept_delivered, kept_kg, baked_size, baked_delivered, baked_kg);
       report_progress(progress, line);
-      // With --bpvf: the smaller error among the files within the target, else the smaller file.
+      // The file smaller as a server sends it (the kept targets' weights animation is float data a compressor
+      // shrinks, the streams are not); with --bpvf, whose budget counts the file's bytes: the smaller error among
+      // the files within the target, else the smaller file.
       const double budget = kBpvfTolerance * settings.target * vertex_frames(file.sampled) / 8;
       const bool kept_fits = double(kept_size) <= budget, baked_fits = double(baked_size) <= budget;
-      const bool take_baked = settings.mode != RateMode::bpvf ? baked_size < kept_size
+      const bool take_baked = settings.mode != RateMode::bpvf ? baked_delivered < kept_delivered
                               : kept_fits != baked_fits       ? baked_fits
                               : kept_fits                     ? baked_kg < kept_kg
                                                               : baked_size < kept_size;

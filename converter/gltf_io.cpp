@@ -1,7 +1,5 @@
 #include "gltf_io.h"
 
-#include "segmorph/version.h"
-
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -16,14 +14,15 @@
 #include <iostream>
 #include <iterator>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
-
-#include <nlohmann/json.hpp>
+#include <unordered_map>
 
 #include "accessor.h"
 #include "json_prepass.h"
 #include "output_file.h"
+#include "segmorph/version.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {
@@ -608,6 +607,59 @@ size_t glb_size(tinygltf::Model model) {
   writer.SetImageWriter(write_no_image, nullptr);
   std::ostringstream stream;
   return writer.WriteGltfSceneToStream(&model, stream, false, true) ? stream.str().size() : 0;
+}
+
+double compressed_estimate(const unsigned char* data, size_t count) {
+  if (count == 0) return 0;
+  auto entropy_bytes = [](const auto& counts, double total) {
+    double bits = 0;
+    for (const auto& entry : counts) bits -= double(entry.second) * std::log2(double(entry.second) / total);
+    return bits / 8;
+  };
+  std::map<unsigned char, size_t> bytes;
+  for (size_t i = 0; i < count; ++i) ++bytes[data[i]];
+  double estimate = std::min(double(count), entropy_bytes(bytes, double(count)));
+  if (count >= 64 && count % 4 == 0) {
+    std::unordered_map<uint32_t, size_t> words;
+    for (size_t i = 0; i < count; i += 4) {
+      uint32_t word;
+      std::memcpy(&word, data + i, 4);
+      ++words[word];
+    }
+    estimate = std::min(estimate, entropy_bytes(words, double(count / 4)) + 4.0 * double(words.size()));
+  }
+  return estimate;
+}
+
+size_t glb_delivered_estimate(tinygltf::Model model) {
+  repack(model);
+  shorten_float_numbers(model);
+  name_empty_objects(model);
+  tinygltf::TinyGLTF writer;
+  writer.SetImageWriter(write_no_image, nullptr);
+  std::ostringstream stream;
+  if (!writer.WriteGltfSceneToStream(&model, stream, false, true)) return 0;
+  const std::string glb = stream.str();
+  const auto* bytes = reinterpret_cast<const unsigned char*>(glb.data());
+  auto u32 = [&](size_t at) {
+    return uint32_t(bytes[at]) | uint32_t(bytes[at + 1]) << 8 | uint32_t(bytes[at + 2]) << 16 |
+           uint32_t(bytes[at + 3]) << 24;
+  };
+  if (glb.size() < 20) return glb.size();
+  const size_t json = u32(12);
+  double estimate = 20 + compressed_estimate(bytes + 20, std::min(json, glb.size() - 20));
+  const size_t bin = 20 + json;
+  if (bin + 8 <= glb.size()) {
+    const size_t length = std::min<size_t>(u32(bin), glb.size() - bin - 8);
+    size_t covered = 0;
+    for (const tinygltf::BufferView& view : model.bufferViews)
+      if (view.buffer == 0 && view.byteOffset + view.byteLength <= length) {
+        estimate += compressed_estimate(bytes + bin + 8 + view.byteOffset, view.byteLength);
+        covered += view.byteLength;
+      }
+    estimate += 8 + double(length - std::min(covered, length));
+  }
+  return size_t(std::ceil(estimate));
 }
 
 namespace {

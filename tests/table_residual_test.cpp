@@ -223,9 +223,11 @@ TEST(TableResiduals, VersionTwoAndTheFlagOnlyWithTheSetting) {
   CodecSettings adaptive;
   adaptive.table_residuals = false;
   adaptive.frame_references = adaptive.motion_contexts = adaptive.weight_contexts = false;
+  adaptive.transform_residuals = false;  // version 4 replaces the residual code
   const Encoded plain = encode(clips, base, adaptive), fast = encode(clips, base, table(CodecSettings()));
   CodecSettings defaults;
   defaults.frame_references = defaults.motion_contexts = defaults.weight_contexts = false;
+  defaults.transform_residuals = false;
   EXPECT_EQ(plain.stream, encode(clips, base, defaults).stream);
   EXPECT_EQ(plain.stream[4], format::kVersion);
   EXPECT_FALSE(plain.stream[5] & format::kFlagTableResiduals);

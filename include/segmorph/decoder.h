@@ -63,7 +63,7 @@ class SEGMORPH_API AnimationDecoder {
   bool is_open() const;
 
   // About the open stream (0 or false when none is open).
-  int stream_version() const;  // 1, 2 or 3
+  int stream_version() const;  // 1 to 4
   bool lossless() const;       // the frames are the encoder's input, bit for bit
   size_t vertex_count() const;
   size_t clip_count() const;

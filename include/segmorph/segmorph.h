@@ -167,13 +167,15 @@ struct EncodeSettings {
   // bpvf and lossless encodes bake; so does keep where a kept skin cannot reach the error target.
   enum class Skins { keep, bake } skins = Skins::keep;
   // What a morph-target mesh (unskinned, one node) stores: its targets or its frames; automatic encodes both ways
-  // where it has at most half as many targets as frames and keeps the smaller file. Lossless encodes bake.
+  // where it has at most half as many targets as frames and keeps the file smaller as a server sends it (an estimate
+  // of its compressed size). Lossless encodes bake.
   enum class Targets { automatic, keep, bake } targets = Targets::automatic;
   // The residuals in the table code of stream version 2 (or 3): faster decoding, larger files. Lossy encodes only.
   bool fast_decode = false;
-  // The latest animation stream version written, 1 to 3 (SEGMORPH_STREAM_VERSION_MAX): below 3, no frame references
-  // and no motion contexts (the encoder uses them only where they make a stream smaller); fast_decode needs 2.
-  int max_stream_version = 3;
+  // The latest animation stream version written, 1 to 4 (SEGMORPH_STREAM_VERSION_MAX): below 3, no frame references
+  // and no motion contexts; below 4, no transform-coded residuals (the encoder uses each only where it makes a stream
+  // smaller; version 4 only with error targets and without fast_decode); fast_decode needs 2.
+  int max_stream_version = 4;
   // Threads for the stages that split their work (the motion fits and refinement, the residual steps' measurement of
   // rate control, the comparison with the input); 0: every hardware thread. The output is the same bytes for every
   // number.

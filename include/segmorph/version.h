@@ -10,10 +10,10 @@
 /* major * 1000 + minor * 10 + patch, as meshoptimizer counts: 0.1.0 is 10. */
 #define SEGMORPH_VERSION (SEGMORPH_VERSION_MAJOR * 1000 + SEGMORPH_VERSION_MINOR * 10 + SEGMORPH_VERSION_PATCH)
 
-/* The animation streams this decoder reads (spec/bitstream.md: versions 1 to 3) and the track stream
+/* The animation streams this decoder reads (spec/bitstream.md: versions 1 to 4) and the track stream
  * (spec/tracks.md: version 1). */
 #define SEGMORPH_STREAM_VERSION_MIN 1
-#define SEGMORPH_STREAM_VERSION_MAX 3
+#define SEGMORPH_STREAM_VERSION_MAX 4
 #define SEGMORPH_TRACK_STREAM_VERSION 1
 
 /* Marks the library's API. The shared library exports these symbols and nothing else. */

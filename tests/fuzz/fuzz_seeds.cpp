@@ -1,8 +1,9 @@
 // Writes the seed corpus of fuzz_animation_stream: valid streams of small synthetic animations of the fuzzer's
 // base mesh, one per codec configuration (lossy at several targets, lossless, fixed cluster counts, each residual
-// predictor on and off, several clips; version 1 with the adaptive residual code, version 2 with the table code and
+// predictor on and off, several clips; version 1 with the adaptive residual code, version 2 with the table code,
 // version 3 with frame references, on animations that repeat their frames, and with the motion's and the weights'
-// contexts), so that mutations start from every path of the decoder. Each stream is checked to be of the version its
+// contexts, and version 4 with the residuals as bases and coefficients), so that mutations start from every path of
+// the decoder. Each stream is checked to be of the version its
 // settings ask for and to decode to the encoder's reconstruction before it is written.
 //
 //   fuzz_seeds OUTPUT_DIRECTORY
@@ -83,12 +84,13 @@ struct Seed {
 };
 
 // Without version 3's tools (frame references, the motion's and the weights' contexts) unless references() or
-// contexts(), or a seed forces the weights' contexts: the seeds of versions 1 and 2 stay of those versions whatever
-// the encoder finds in their frames.
+// contexts(), or a seed forces the weights' contexts, and without version 4's unless transform(): the seeds of
+// versions 1 and 2 stay of those versions whatever the encoder finds in their frames.
 CodecSettings lossy(double error) {
   CodecSettings settings;
   settings.target = error;
   settings.frame_references = settings.motion_contexts = settings.weight_contexts = false;
+  settings.transform_residuals = false;
   return settings;
 }
 
@@ -96,12 +98,14 @@ CodecSettings lossless() {
   CodecSettings settings;
   settings.mode = RateMode::lossless;
   settings.frame_references = settings.motion_contexts = settings.weight_contexts = false;
+  settings.transform_residuals = false;
   return settings;
 }
 
 CodecSettings bpvf(double bits) {
   CodecSettings settings;
   settings.frame_references = settings.motion_contexts = settings.weight_contexts = false;
+  settings.transform_residuals = false;
   settings.mode = RateMode::bpvf;
   settings.target = bits;
   return settings;
@@ -133,6 +137,12 @@ CodecSettings references(CodecSettings settings) {
 // The motion's coding chosen by the encoder (stream version 3 where contexts or linear prediction pay).
 CodecSettings contexts(CodecSettings settings) {
   settings.motion_contexts = true;
+  return settings;
+}
+
+// The residuals as bases and coefficients (stream version 4, where that is smaller: the seeds below are).
+CodecSettings transform(CodecSettings settings) {
+  settings.transform_residuals = true;
   return settings;
 }
 
@@ -174,6 +184,10 @@ std::vector<Seed> seeds() {
       {"motion_contexts_lossless_two_clips", contexts(lossless()), {16, 9}},
       {"weight_contexts_error_0.15", with_clusters(lossy(0.15), 6), {10}, 0, true},
       {"weight_contexts_references_two_clips", references(lossy(0.5)), {9, 8}, 3, true},
+      {"transform_error_0.15", transform(lossy(0.15)), {10}},
+      {"transform_error_0.5_three_clips", transform(lossy(0.5)), {6, 3, 1}},
+      {"transform_clusters_3", transform(with_clusters(lossy(0.05), 3)), {12}},
+      {"transform_references", transform(references(lossy(0.15))), {12}, 4},
   };
 }
 
@@ -211,7 +225,7 @@ int main(int argc, char** argv) {
     }
     const bool version_3 = seed.settings.frame_references || seed.settings.motion_contexts ||
                            seed.settings.weight_contexts || seed.force_weight_contexts;
-    const int version = version_3 ? 3 : seed.settings.table_residuals ? 2 : 1;
+    const int version = seed.settings.transform_residuals ? 4 : version_3 ? 3 : seed.settings.table_residuals ? 2 : 1;
     if (status.ok() && (stream.size() < 5 || stream[4] != version))
       status = Status(StatusCode::internal, "not a version-" + std::to_string(version) + " stream");
     if (status.ok()) status = decode_animation(stream.data(), stream.size(), mesh.positions, mesh.triangles, decoded);

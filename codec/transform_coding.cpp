@@ -1,0 +1,329 @@
+#include "transform_coding.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "codec.h"
+#include "metrics.h"
+#include "parallel.h"
+#include "reconstruction.h"
+#include "stream_format.h"
+#include "transform_residuals.h"
+
+namespace segmorph {
+namespace {
+
+using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// Above this many frames the bases' eigenproblems (F × F) are not tried.
+constexpr size_t kMaxTransformFrames = 2048;
+// The coefficient steps tried: kSteps from kFinestStep to kCoarsestStep times the budget's step (the uniform
+// quantizer step whose noise alone would spend the whole budget on every value).
+constexpr int kSteps = 24;
+constexpr double kFinestStep = 0.1, kCoarsestStep = 24;
+// A basis vector's estimated price while choosing: its entries at this many bits each, and its step.
+constexpr double kEstimatedBitsPerEntry = 4;
+
+// The basis sizes tried: 0, 1, 2, ... then about 25 % apart.
+std::vector<size_t> basis_sizes(size_t most) {
+  std::vector<size_t> sizes = {0};
+  for (size_t m = 1; m <= most; m = std::max(m + 1, m * 5 / 4)) sizes.push_back(m);
+  return sizes;
+}
+
+// The orthonormal PCA basis of the rows (each weighted), as rows, by decreasing energy: the eigenvectors of
+// rowsᵀ W rows (F × F), or, with fewer rows than frames, of rows W rowsᵀ (n × n) taken back through the rows (the
+// same vectors, for a smaller eigenproblem). Only the vectors before the point where the energy left (the
+// eigenvalues after them) is below `negligible`, and none of no energy.
+Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible) {
+  Eigen::MatrixXd scaled = rows;
+  for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
+  const bool dual = scaled.rows() < scaled.cols();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(dual ? Eigen::MatrixXd(scaled * scaled.transpose())
+                                                             : Eigen::MatrixXd(scaled.transpose() * scaled));
+  const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
+  const double largest = std::max(values.maxCoeff(), 0.0);
+  double left = std::max(values.sum(), 0.0);
+  Matrix basis(0, scaled.cols());
+  for (Eigen::Index i = values.size() - 1; i >= 0 && left > negligible && values(i) > largest * 1e-12; --i) {
+    Eigen::RowVectorXd vector =
+        dual ? Eigen::RowVectorXd((scaled.transpose() * solver.eigenvectors().col(i)).transpose())
+             : Eigen::RowVectorXd(solver.eigenvectors().col(i).transpose());
+    vector /= vector.norm();
+    basis.conservativeResize(basis.rows() + 1, Eigen::NoChange);
+    basis.row(basis.rows() - 1) = vector;
+    left -= values(i);
+  }
+  return basis;
+}
+
+struct Option {
+  uint32_t source = format::kBasisNone;
+  size_t m = 0;
+  double step = 0, bits = 0, error = 0;
+};
+
+// Zeroth-order bits of the quantized values of column `column` (step `step`), and their squared quantization error
+// (each row weighted) into `quantization`.
+double column_bits(const Matrix& coefficients, Eigen::Index column, double step, const std::vector<double>& weight,
+                   double& quantization, std::vector<uint32_t>& counts) {
+  const size_t n = size_t(coefficients.rows());
+  const double inverse = 1 / step, reach = coefficients.col(column).cwiseAbs().maxCoeff() * inverse;
+  quantization = 0;
+  auto add = [&](uint32_t count) { return count ? -double(count) * std::log2(double(count) / double(n)) : 0.0; };
+  double bits = 0;
+  if (reach <= 4.0 * double(n) + 64) {  // a histogram over the values' range
+    const int64_t span = int64_t(reach + 0.5) + 1;
+    counts.assign(size_t(2 * span + 1), 0);
+    for (size_t r = 0; r < n; ++r) {
+      const double c = coefficients(Eigen::Index(r), column);
+      const int64_t index = quantizer_index(c * inverse);
+      const double q = double(index);
+      ++counts[size_t(index + span)];
+      quantization += weight[r] * (c - q * step) * (c - q * step);
+    }
+    for (uint32_t count : counts) bits += add(count);
+    return bits;
+  }
+  std::unordered_map<int64_t, uint32_t> map;
+  for (size_t r = 0; r < n; ++r) {
+    const double c = coefficients(Eigen::Index(r), column);
+    const int64_t index = quantizer_index(c * inverse);
+    const double q = double(index);
+    ++map[index];
+    quantization += weight[r] * (c - q * step) * (c - q * step);
+  }
+  for (const auto& entry : map) bits += add(entry.second);
+  return bits;
+}
+
+// The options of one cluster's rows in one basis (coefficients: the rows' projections, by decreasing energy): for
+// each basis size and step, the zeroth-order bits of the quantized coefficients (a histogram per vector) and the
+// squared error (dropped energy plus quantization), each row weighted. Vectors past the point where what is left of
+// the rows' energy is below `negligible` are not tried; `energy` receives the energy of each vector tried.
+void add_options(const Matrix& coefficients, const std::vector<double>& weight, double total, uint32_t source,
+                 double unit, double bits_per_vector, double negligible, std::vector<Option>& options,
+                 std::vector<double>& energy) {
+  const size_t n = size_t(coefficients.rows());
+  energy.clear();
+  double left = total;
+  for (Eigen::Index i = 0; i < coefficients.cols() && left > negligible; ++i) {
+    double e = 0;
+    for (size_t r = 0; r < n; ++r) e += weight[r] * coefficients(Eigen::Index(r), i) * coefficients(Eigen::Index(r), i);
+    energy.push_back(e);
+    left -= e;
+  }
+  const std::vector<size_t> sizes = basis_sizes(energy.size());
+  std::vector<uint32_t> counts;
+  for (int d = 0; d < kSteps; ++d) {
+    const double step = double(float(unit * kFinestStep * std::pow(kCoarsestStep / kFinestStep, d / (kSteps - 1.0))));
+    double bits = 0, kept = 0, quantization = 0;
+    size_t m = 0;
+    for (size_t size : sizes) {
+      if (size == 0) continue;
+      for (; m < size; ++m) {
+        double q = 0;
+        bits += column_bits(coefficients, Eigen::Index(m), step, weight, q, counts);
+        quantization += q;
+        kept += energy[m];
+      }
+      options.push_back({source, m, step, bits + (source == format::kBasisOwn ? double(m) * bits_per_vector : 0) + 40,
+                         std::max(total - kept, 0.0) + quantization});
+    }
+  }
+}
+
+struct Choice {
+  std::vector<Option> per_cluster;
+  size_t stream_vectors = 0;
+  double bits = INFINITY, error = 0, lambda = 0;
+};
+
+// The options minimizing bits + lambda × error per cluster, lambda bisected so that the error is at most `budget`;
+// the stream's basis charged once, its size the largest any cluster uses (each of `sizes` tried as the most a
+// cluster may use).
+Choice choose(const std::vector<std::vector<Option>>& options, double budget, const std::vector<size_t>& sizes,
+              double bits_per_vector) {
+  Choice best;
+  for (size_t most : sizes) {
+    auto pick = [&](double lambda) {
+      Choice c;
+      c.bits = 0;
+      for (const std::vector<Option>& list : options) {
+        const Option* chosen = &list[0];
+        for (const Option& o : list)
+          if (!(o.source == format::kBasisStream && o.m > most) &&
+              o.bits + lambda * o.error < chosen->bits + lambda * chosen->error)
+            chosen = &o;
+        c.per_cluster.push_back(*chosen);
+        c.bits += chosen->bits, c.error += chosen->error;
+        if (chosen->source == format::kBasisStream) c.stream_vectors = std::max(c.stream_vectors, chosen->m);
+      }
+      c.bits += double(c.stream_vectors) * bits_per_vector;
+      c.lambda = lambda;
+      return c;
+    };
+    double low = 1e-12, high = 1e12;
+    if (pick(high).error > budget) continue;
+    for (int i = 0; i < 80 && high > low * (1 + 1e-6); ++i) {
+      const double middle = std::sqrt(low * high);
+      (pick(middle).error > budget ? low : high) = middle;
+    }
+    const Choice c = pick(high);
+    if (c.bits < best.bits) best = c;
+  }
+  return best;
+}
+
+// A basis as the stream carries it: the first m vectors, each with the step that minimizes bits + lambda × error
+// for a vector whose coefficients have squared norm `energy` (an entry's error reaches the frames through them):
+// F log2(1 / step) + lambda energy F step² / 12 is least at step² = 6 / (lambda ln 2 energy); at most half the
+// vector's largest entry, so that no vector quantizes to zero.
+StreamContent::Basis quantized_basis(const Matrix& basis, size_t m, const std::vector<double>& energy, double lambda) {
+  StreamContent::Basis out;
+  const size_t frames = size_t(basis.cols());
+  for (size_t i = 0; i < m; ++i) {
+    const Eigen::Index row = Eigen::Index(i);
+    const double largest = basis.row(row).cwiseAbs().maxCoeff();
+    double step = std::sqrt(6 / (lambda * std::log(2.0) * std::max(energy[i], 1e-300)));
+    step = std::clamp(step, largest * 1e-6, largest / 2);
+    const float stored = float(step);
+    out.step.push_back(stored);
+    for (size_t f = 0; f < frames; ++f)
+      out.entries.push_back(int32_t(std::lround(basis(row, Eigen::Index(f)) / double(stored))));
+  }
+  return out;
+}
+
+// The decoder's values of a basis's first m vectors (m × F).
+Matrix basis_values(const StreamContent::Basis& basis, size_t m, size_t frames) {
+  Matrix values(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(frames));
+  for (size_t i = 0; i < m; ++i)
+    for (size_t f = 0; f < frames; ++f)
+      values(Eigen::Index(i), Eigen::Index(f)) = double(basis.entries[i * frames + f]) * double(basis.step[i]);
+  return values;
+}
+
+}  // namespace
+
+bool transform_content(const EncodeProblem& problem, const StreamContent& content, double budget,
+                       StreamContent& transformed, std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored) {
+  const size_t welded = content.welded_count, frames = content.frame_count(), clusters = content.cluster_count;
+  if (frames > kMaxTransformFrames || !(budget > 0)) return false;
+  // The trajectories: row w × 3 + a, the frames' positions minus the prediction of the quantized motion and weights.
+  const std::vector<double> predicted = predicted_frames(content, problem.base_welded);
+  Matrix rows(Eigen::Index(welded * 3), Eigen::Index(frames));
+  for (size_t f = 0; f < frames; ++f)
+    for (size_t i = 0; i < welded * 3; ++i)
+      rows(Eigen::Index(i), Eigen::Index(f)) =
+          double(problem.trajectories.positions[f * welded * 3 + i]) - predicted[f * welded * 3 + i];
+  std::vector<double> weight(welded * 3);
+  for (size_t i = 0; i < weight.size(); ++i) weight[i] = double(problem.multiplicity[i / 3]);
+  const double unit = std::sqrt(12 * budget / (3.0 * double(content.vertex_count) * double(frames)));
+  const double bits_per_vector = double(frames) * kEstimatedBitsPerEntry + 32;
+  const double negligible = budget * 1e-4;  // energy a cluster may leave in vectors not tried
+
+  // Each cluster's rows; the stream's basis and the cluster's own; the options.
+  std::vector<std::vector<Eigen::Index>> members(clusters);
+  for (size_t w = 0; w < welded; ++w)
+    for (Eigen::Index a = 0; a < 3; ++a) members[content.labels[w]].push_back(Eigen::Index(w * 3) + a);
+  const Matrix stream_basis = pca_basis(rows, weight, negligible);
+  std::vector<Matrix> own_basis(clusters);
+  std::vector<std::vector<double>> own_energy(clusters), stream_energy(clusters);
+  std::vector<std::vector<Option>> options(clusters);
+  auto prepare = [&](size_t k) {
+    Matrix own(Eigen::Index(members[k].size()), Eigen::Index(frames));
+    std::vector<double> own_weight(members[k].size());
+    double total = 0;
+    for (size_t i = 0; i < members[k].size(); ++i) {
+      own.row(Eigen::Index(i)) = rows.row(members[k][i]);
+      own_weight[i] = weight[size_t(members[k][i])];
+      total += own_weight[i] * own.row(Eigen::Index(i)).squaredNorm();
+    }
+    options[k].push_back({format::kBasisNone, 0, 0, 8, total});
+    if (members[k].empty()) return;
+    const Matrix in_stream = own * stream_basis.transpose();
+    add_options(in_stream, own_weight, total, format::kBasisStream, unit, bits_per_vector, negligible, options[k],
+                stream_energy[k]);
+    own_basis[k] = pca_basis(own, own_weight, negligible);
+    const Matrix in_own = own * own_basis[k].transpose();
+    add_options(in_own, own_weight, total, format::kBasisOwn, unit, bits_per_vector, negligible, options[k],
+                own_energy[k]);
+  };
+  parallel_ranges(clusters, thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) prepare(k);
+  });
+  // Choose, then measure the decoder's frames exactly; tighten the budget until they meet it.
+  const std::vector<size_t> sizes = basis_sizes(frames);
+  double target = budget;
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    const Choice choice = choose(options, target, sizes, bits_per_vector);
+    if (std::isinf(choice.bits)) return false;
+    transformed = content;
+    transformed.flags &= uint8_t(~format::kResidualLoopFlags);
+    transformed.transform = true;
+    transformed.residuals.clear();
+    transformed.narrow_residuals.clear();
+    for (float& step : transformed.residual_step) step = 0;
+    std::vector<double> energy(choice.stream_vectors, 0.0);
+    for (size_t k = 0; k < clusters; ++k)
+      if (choice.per_cluster[k].source == format::kBasisStream)
+        for (size_t i = 0; i < choice.per_cluster[k].m; ++i) energy[i] += stream_energy[k][i];
+    transformed.stream_basis = quantized_basis(stream_basis, choice.stream_vectors, energy, choice.lambda);
+    const Matrix stream_values = basis_values(transformed.stream_basis, choice.stream_vectors, frames);
+    transformed.basis_source.assign(clusters, format::kBasisNone);
+    transformed.basis_size.assign(clusters, 0);
+    transformed.coefficient_step.assign(clusters, 0.0f);
+    transformed.own_basis.assign(clusters, StreamContent::Basis());
+    for (size_t k = 0; k < clusters; ++k) {
+      const Option& o = choice.per_cluster[k];
+      transformed.basis_source[k] = o.source;
+      transformed.basis_size[k] = uint32_t(o.m);
+      transformed.coefficient_step[k] = float(o.step);
+      if (o.source == format::kBasisOwn)
+        transformed.own_basis[k] = quantized_basis(own_basis[k], o.m, own_energy[k], choice.lambda);
+    }
+    // The coefficients: least squares against the basis as the decoder has it, then quantized.
+    TransformCoefficients coefficients = transform_layout(transformed);
+    bool fits = true;
+    for (size_t k = 0; k < clusters && fits; ++k) {
+      const size_t m = transformed.basis_size[k];
+      if (m == 0) continue;
+      const Matrix values = transformed.basis_source[k] == format::kBasisOwn
+                                ? basis_values(transformed.own_basis[k], m, frames)
+                                : Matrix(stream_values.topRows(Eigen::Index(m)));
+      const Eigen::LDLT<Eigen::MatrixXd> gram(values * values.transpose());
+      const double step = double(transformed.coefficient_step[k]);
+      for (Eigen::Index r : members[k]) {
+        const Eigen::VectorXd c = gram.solve(Eigen::VectorXd(values * rows.row(r).transpose()));
+        const size_t w = size_t(r) / 3, a = size_t(r) % 3;
+        for (size_t i = 0; i < m; ++i) {
+          const double q = std::round(c(Eigen::Index(i)) / step);
+          if (!(std::abs(q) <= double(format::kMaxTransformValue))) fits = false;
+          coefficients.values[coefficients.offset[w] + a * m + i] = fits ? int32_t(q) : 0;
+        }
+      }
+    }
+    if (!fits || coefficients.values.size() > format::kMaxTransformCoefficients) return false;
+    transformed.coefficient_symbols = transform_symbols(transformed, problem.traversal, coefficients);
+    // The frames as the decoder makes them, and their error.
+    if (!reconstruct_clips(transformed, problem.base, problem.clips[0].triangles, restored).ok()) return false;
+    double error = 0;
+    for (size_t c = 0; c < restored.size(); ++c)
+      for (size_t i = 0; i < restored[c].positions.size(); ++i) {
+        const double d = double(problem.clips[c].positions[i]) - double(restored[c].positions[i]);
+        error += d * d;
+      }
+    if (error <= budget) {
+      stream.clear();
+      write_stream(transformed, problem.base, stream);
+      return true;
+    }
+    target *= std::pow(budget / error, 1.5) * 0.999;
+  }
+  return false;
+}
+
+}  // namespace segmorph

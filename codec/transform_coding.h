@@ -1,0 +1,23 @@
+// The encoder's side of version 4's residuals (transform_residuals.h is the decoder's): each cluster's residual
+// trajectories over all frames in a temporal basis (nothing, the first m vectors of the stream's PCA basis, or m of
+// its own), its coefficients quantized with a step of its own, chosen for the fewest estimated bytes at no more
+// squared error than a budget (docs/codec.md, "Transform coding in place of the residual loop").
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "encode_problem.h"
+#include "frame_sequence.h"
+#include "stream.h"
+
+namespace segmorph {
+
+// From `content` (the residual loop's: its clusters, motion and weights are kept), a version-4 content whose frames
+// have a squared error (over every vertex of every frame, against the problem's clips) of at most `budget`, its
+// stream in `stream` and its frames in `restored` (shaped as the clips). Returns false, leaving the outputs
+// undefined, when none is found (too many frames or coefficients for the format, or the budget not met).
+bool transform_content(const EncodeProblem& problem, const StreamContent& content, double budget,
+                       StreamContent& transformed, std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored);
+
+}  // namespace segmorph

@@ -1,0 +1,138 @@
+#include "transform_residuals.h"
+
+#include <cassert>
+
+#include "stream_format.h"
+
+namespace segmorph {
+namespace {
+
+// The nearest integer to sum / count (count > 0), halves away from zero, in integers.
+int64_t rounded_mean(int64_t sum, int64_t count) {
+  return sum >= 0 ? (2 * sum + count) / (2 * count) : -((-2 * sum + count) / (2 * count));
+}
+
+// Per welded vertex, its place among its cluster's welded vertices (ascending); per cluster, where its symbols start.
+struct SymbolLayout {
+  std::vector<uint32_t> rank;
+  std::vector<uint64_t> start;
+  std::vector<uint32_t> members;  // per cluster
+};
+
+SymbolLayout symbol_layout(const StreamContent& content) {
+  SymbolLayout layout;
+  layout.rank.resize(content.welded_count);
+  layout.members.assign(content.cluster_count, 0);
+  for (uint32_t w = 0; w < content.welded_count; ++w) layout.rank[w] = layout.members[content.labels[w]]++;
+  layout.start.resize(content.cluster_count);
+  uint64_t at = 0;
+  for (size_t k = 0; k < content.cluster_count; ++k) {
+    layout.start[k] = at;
+    at += uint64_t(content.basis_size[k]) * 3 * layout.members[k];
+  }
+  return layout;
+}
+
+// Walks the traversal: for each welded vertex, axis and vector, the prediction from the earlier neighbours' values
+// (already final), then `code(value, prediction, symbol)` makes the vertex's value final.
+template <typename Code>
+bool walk(const StreamContent& content, const ResidualTraversal& traversal, TransformCoefficients& coefficients,
+          Code code) {
+  const SymbolLayout layout = symbol_layout(content);
+  for (size_t p = 0; p < traversal.order.size(); ++p) {
+    const uint32_t w = traversal.order[p], k = content.labels[w], m = content.basis_size[k];
+    for (uint32_t a = 0; a < 3; ++a)
+      for (uint32_t i = 0; i < m; ++i) {
+        int64_t sum = 0, count = 0;
+        for (uint32_t j = traversal.earlier_offset[p]; j < traversal.earlier_offset[p + 1]; ++j) {
+          const uint32_t neighbour = traversal.order[traversal.earlier[j]];
+          if (content.labels[neighbour] != k) continue;
+          sum += coefficients.values[coefficients.offset[neighbour] + a * m + i];
+          ++count;
+        }
+        const int64_t prediction = count > 0 ? rounded_mean(sum, count) : 0;
+        const uint64_t symbol = layout.start[k] + (uint64_t(i) * 3 + a) * layout.members[k] + layout.rank[w];
+        if (!code(coefficients.values[coefficients.offset[w] + a * m + i], prediction, symbol)) return false;
+      }
+  }
+  return true;
+}
+
+}  // namespace
+
+TransformCoefficients transform_layout(const StreamContent& content) {
+  TransformCoefficients coefficients;
+  coefficients.offset.resize(size_t(content.welded_count) + 1);
+  coefficients.offset[0] = 0;
+  for (size_t w = 0; w < content.welded_count; ++w)
+    coefficients.offset[w + 1] = coefficients.offset[w] + uint64_t(content.basis_size[content.labels[w]]) * 3;
+  coefficients.values.assign(size_t(coefficients.offset.back()), 0);
+  return coefficients;
+}
+
+Status transform_coefficients(const StreamContent& content, const ResidualTraversal& traversal,
+                              TransformCoefficients& coefficients) {
+  coefficients = transform_layout(content);
+  assert(coefficients.values.size() == content.coefficient_symbols.size());
+  const bool ok = walk(content, traversal, coefficients, [&](int32_t& value, int64_t prediction, uint64_t symbol) {
+    const int64_t q = prediction + content.coefficient_symbols[size_t(symbol)];
+    if (q < -format::kMaxTransformValue || q > format::kMaxTransformValue) return false;
+    value = int32_t(q);
+    return true;
+  });
+  return ok ? Status::Ok() : Status(StatusCode::bad_data, "animation stream: coefficient out of range");
+}
+
+std::vector<int32_t> transform_symbols(const StreamContent& content, const ResidualTraversal& traversal,
+                                       const TransformCoefficients& coefficients) {
+  std::vector<int32_t> symbols(coefficients.values.size());
+  TransformCoefficients copy = coefficients;  // walk() reads the values it has made final: here, all of them
+  walk(content, traversal, copy, [&](int32_t& value, int64_t prediction, uint64_t symbol) {
+    symbols[size_t(symbol)] = int32_t(int64_t(value) - prediction);
+    return true;
+  });
+  return symbols;
+}
+
+TransformResiduals::TransformResiduals(const StreamContent& content, const TransformCoefficients& coefficients)
+    : content_(content), coefficients_(coefficients), frames_(content.frame_count()) {
+  auto frame_major = [&](const StreamContent::Basis& basis, size_t vectors) {
+    std::vector<double> values(frames_ * vectors);
+    for (size_t i = 0; i < vectors; ++i)
+      for (size_t f = 0; f < frames_; ++f)
+        values[f * vectors + i] = double(basis.entries[i * frames_ + f]) * double(basis.step[i]);
+    return values;
+  };
+  stream_ = frame_major(content.stream_basis, content.stream_basis.size());
+  scaled_.resize(coefficients.values.size());
+  for (size_t w = 0; w < content.welded_count; ++w) {
+    const double step = double(content.coefficient_step[content.labels[w]]);
+    for (uint64_t i = coefficients.offset[w]; i < coefficients.offset[w + 1]; ++i)
+      scaled_[i] = double(coefficients.values[i]) * step;
+  }
+  own_.resize(content.cluster_count);
+  for (size_t k = 0; k < content.cluster_count; ++k)
+    if (content.basis_source[k] == format::kBasisOwn)
+      own_[k] = frame_major(content.own_basis[k], content.basis_size[k]);
+}
+
+void TransformResiduals::frame(size_t frame, double* out) const {
+  const size_t stream_vectors = content_.stream_basis.size();
+  for (size_t w = 0; w < content_.welded_count; ++w) {
+    const uint32_t k = content_.labels[w], m = content_.basis_size[k];
+    const double* basis =
+        content_.basis_source[k] == format::kBasisOwn ? &own_[k][frame * m] : &stream_[frame * stream_vectors];
+    const double* c = &scaled_[coefficients_.offset[w]];
+    // The three axes' sums side by side (each in its own order), so that their additions overlap.
+    double x = 0.0, y = 0.0, z = 0.0;
+    for (uint32_t i = 0; i < m; ++i) {
+      const double b = basis[i];
+      x = x + c[i] * b;
+      y = y + c[m + i] * b;
+      z = z + c[2 * m + i] * b;
+    }
+    out[w * 3] = x, out[w * 3 + 1] = y, out[w * 3 + 2] = z;
+  }
+}
+
+}  // namespace segmorph

@@ -1,0 +1,186 @@
+// Stream version 4: the residuals as temporal bases and coefficients (codec/transform_coding.h, the encoder's side;
+// codec/transform_residuals.h, the decoder's; spec/bitstream.md 5.9 and 8.7.1).
+#include "transform_residuals.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "codec.h"
+#include "frame_decoder.h"
+#include "stream.h"
+#include "stream_format.h"
+#include "test_meshes.h"
+
+namespace segmorph {
+namespace {
+
+using testing::bending_clip;
+using testing::encode;
+using testing::Encoded;
+using testing::kg;
+using testing::quantized_base;
+
+// Two clips of the bending sphere (642 vertices), the second with another phase: smooth, non-rigid motion the
+// affine clusters leave residuals on.
+std::vector<FrameSequence> two_clips() {
+  return {bending_clip(30, 1.0, 0), bending_clip(21, 0.7, 1.5)};
+}
+
+CodecSettings residual_loop(CodecSettings settings) {
+  settings.transform_residuals = false;
+  return settings;
+}
+
+CodecSettings error(double target) {
+  CodecSettings settings;
+  settings.target = target;
+  return settings;
+}
+
+// At each error target: version 4 with no residual-loop flag, fewer bytes than the residual loop's stream at no more
+// KG error, the decoder's frames the encoder's bit for bit, and the content read back written to the same bytes.
+TEST(TransformResiduals, FewerBytesAtNoMoreErrorAndTheDecodersFramesAreTheEncoders) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  for (double target : {0.15, 0.5}) {
+    SCOPED_TRACE(target);
+    const Encoded transform = encode(clips, base, error(target)),
+                  loop = encode(clips, base, residual_loop(error(target)));
+    ASSERT_GT(transform.stream.size(), 5u);
+    EXPECT_EQ(transform.stream[4], format::kTransformVersion);
+    EXPECT_EQ(transform.stream[5] & format::kResidualLoopFlags, 0);
+    EXPECT_LE(loop.stream[4], format::kReferenceVersion);
+    EXPECT_LT(transform.stream.size(), loop.stream.size());
+    const double transform_kg = kg(clips, transform.reconstruction), loop_kg = kg(clips, loop.reconstruction);
+    EXPECT_LE(transform_kg, loop_kg * (1 + 1e-12));
+    EXPECT_NEAR(transform.report.kg_percent, transform_kg, 1e-9);
+    EXPECT_EQ(transform.report.bytes_total, transform.stream.size());
+    std::vector<FrameSequence> decoded;
+    ASSERT_TRUE(
+        decode_animation(transform.stream.data(), transform.stream.size(), base, clips[0].triangles, decoded).ok());
+    ASSERT_EQ(decoded.size(), clips.size());
+    for (size_t c = 0; c < clips.size(); ++c) EXPECT_EQ(decoded[c].positions, transform.reconstruction[c].positions);
+    StreamContent content;
+    ASSERT_TRUE(read_stream(transform.stream.data(), transform.stream.size(), base, content).ok());
+    EXPECT_TRUE(content.transform);
+    EXPECT_TRUE(content.residuals.empty());
+    std::vector<uint8_t> again;
+    write_stream(content, base, again);
+    EXPECT_EQ(again, transform.stream);
+  }
+}
+
+// Every way of decoding gives the same floats: one or two frames at a time, and after seeking back and forth.
+TEST(TransformResiduals, OneOrTwoFramesAtATimeAndAfterASeekAreTheEncodersFrames) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  const Encoded encoded = encode(clips, base, error(0.15));
+  ASSERT_EQ(encoded.stream[4], format::kTransformVersion);
+  for (bool two : {false, true}) {
+    SCOPED_TRACE(two ? "two at a time" : "one at a time");
+    FrameDecoder decoder;
+    ASSERT_TRUE(decoder.open(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles).ok());
+    ASSERT_TRUE(decoder.seek(1).ok());
+    for (int pass = 0; pass < 2; ++pass) {
+      for (size_t c = pass == 0 ? 1 : 0; c < clips.size(); ++c) {
+        std::vector<float> frames;
+        while (decoder.next_clip() == c)
+          ASSERT_TRUE(decoder.decode_append(two && decoder.frames_left_in_clip() >= 2, frames).ok());
+        EXPECT_EQ(frames, encoded.reconstruction[c].positions) << "clip " << c << ", pass " << pass;
+      }
+      ASSERT_TRUE(decoder.seek(0).ok());
+    }
+  }
+}
+
+// The coefficients' symbols and the coefficients are each other's inverse through the traversal's prediction.
+TEST(TransformResiduals, SymbolsAndCoefficientsAreInverse) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  const Encoded encoded = encode(clips, base, error(0.15));
+  StreamContent content;
+  ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+  const ResidualTraversal traversal = residual_traversal(content, clips[0].triangles);
+  TransformCoefficients coefficients;
+  ASSERT_TRUE(transform_coefficients(content, traversal, coefficients).ok());
+  ASSERT_FALSE(coefficients.values.empty());
+  EXPECT_EQ(transform_symbols(content, traversal, coefficients), content.coefficient_symbols);
+  // Not a trivial pair: some coefficient is nonzero, and some symbol differs from its coefficient (a prediction).
+  EXPECT_TRUE(std::any_of(coefficients.values.begin(), coefficients.values.end(), [](int32_t q) { return q != 0; }));
+  int64_t coefficient_sum = 0, symbol_sum = 0;
+  for (int32_t q : coefficients.values) coefficient_sum += q < 0 ? -q : q;
+  for (int32_t s : content.coefficient_symbols) symbol_sum += s < 0 ? -s : s;
+  EXPECT_NE(coefficient_sum, symbol_sum);
+}
+
+// Without the setting (the converter's --max-stream-version 3), with the table code, with a bpvf target and lossless,
+// the stream stays on the residual loop.
+TEST(TransformResiduals, OnlyWithTheSettingAndAnErrorTarget) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  EXPECT_TRUE(CodecSettings().transform_residuals);
+  CodecSettings table = error(0.5);
+  table.table_residuals = true;
+  CodecSettings bpvf;
+  bpvf.mode = RateMode::bpvf;
+  bpvf.target = 2;
+  CodecSettings lossless;
+  lossless.mode = RateMode::lossless;
+  for (const CodecSettings& settings : {residual_loop(error(0.5)), table, bpvf, lossless})
+    EXPECT_LE(encode(clips, base, settings).stream[4], format::kReferenceVersion);
+}
+
+// A stream that breaks version 4's rules is refused, never decoded: residual-loop flags, a basis source or size out
+// of range, a bad step, a coefficient beyond the limit; and every prefix of a valid stream.
+TEST(TransformResidualsHostile, BrokenStreamsAreRefused) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  const Encoded encoded = encode(clips, base, error(0.15));
+  StreamContent content;
+  ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+  auto refused = [&](const StreamContent& changed, const char* what) {
+    std::vector<uint8_t> stream;
+    write_stream(changed, base, stream);
+    std::vector<FrameSequence> decoded;
+    const Status status = decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded);
+    EXPECT_FALSE(status.ok()) << what;
+    EXPECT_EQ(status.code(), StatusCode::bad_data) << what;
+  };
+  size_t with_basis = 0;
+  while (with_basis < content.cluster_count && content.basis_size[with_basis] == 0) ++with_basis;
+  ASSERT_LT(with_basis, content.cluster_count);
+  {
+    std::vector<uint8_t> stream = encoded.stream;
+    stream[5] |= format::kFlagTemporalResiduals;
+    std::vector<FrameSequence> decoded;
+    EXPECT_FALSE(decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded).ok());
+  }
+  {
+    StreamContent changed = content;
+    changed.basis_source[with_basis] = 3;
+    refused(changed, "basis source 3");
+  }
+  {
+    StreamContent changed = content;
+    changed.basis_size[with_basis] = uint32_t(content.frame_count() + 1);
+    refused(changed, "more vectors than frames");
+  }
+  {
+    StreamContent changed = content;
+    changed.coefficient_step[with_basis] = 0;
+    refused(changed, "a zero coefficient step");
+  }
+  {
+    StreamContent changed = content;
+    changed.coefficient_symbols[0] = INT32_MAX;  // its prediction is at least −kMaxTransformValue
+    refused(changed, "a coefficient beyond the limit");
+  }
+  for (size_t size = 0; size < encoded.stream.size(); size += std::max<size_t>(1, encoded.stream.size() / 200)) {
+    std::vector<FrameSequence> decoded;
+    EXPECT_FALSE(decode_animation(encoded.stream.data(), size, base, clips[0].triangles, decoded).ok()) << size;
+  }
+}
+
+}  // namespace
+}  // namespace segmorph
