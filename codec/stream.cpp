@@ -348,7 +348,8 @@ Status code_transform(Coder& coder, Models& models, StreamContent& content) {
     if (source == format::kBasisNone) continue;
     coder.count(models.count, content.basis_size[k]);
     const uint32_t size = content.basis_size[k];
-    if (coder.failed() || size == 0 || size > (source == format::kBasisStream ? stream_vectors : frames))
+    if (coder.failed() || size == 0 || size > format::kMaxBasisSize ||
+        size > (source == format::kBasisStream ? stream_vectors : frames))
       return corrupt("bad basis size");
     coder.float_bits(content.coefficient_step[k]);
     if (!(content.coefficient_step[k] > 0) || !std::isfinite(content.coefficient_step[k]))
@@ -551,6 +552,9 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
   HeadReader reader{decoder};
   SEGMORPH_RETURN_IF_ERROR(code_head(reader, models, base, content));
   if (content.transform) {  // the whole body: the frames need nothing more from the stream
+    if (uint64_t(content.welded_count) * content.frame_count() >
+        (uint64_t(length) + 4) * format::kMaxVertexFramesPerByte)
+      return corrupt("more vertex-frames than a version 4 stream of its length may claim");
     SEGMORPH_RETURN_IF_ERROR(code_transform(reader, models, content));
     return decoder.finish();
   }
@@ -589,7 +593,7 @@ size_t StreamReader::frame_bound() const {
   assert(decoder_ && content_ && content_->welded_count > 0);
   // In 64 bits: a size_t of 32 bits would wrap for streams of a few megabytes.
   uint64_t vertex_frames;
-  // Version 4: read_head read every symbol; the motion's F × K × 12 of them proved the frame count.
+  // Version 4: read_head read every symbol, and checked W × F against the body's length (kMaxVertexFramesPerByte).
   if (content_->transform) return content_->frame_count();
   if (table_residuals_) {
     vertex_frames = uint64_t(size_ - format::kHeaderBytes - body_size_) * table_code::kVertexFramesPerByte;

@@ -63,7 +63,7 @@ struct StreamContent {
   std::vector<float> coefficient_step;  // K: the cluster's coefficients are multiples of it
   std::vector<Basis> own_basis;         // K: with kBasisOwn, the cluster's m vectors
   // Per cluster with a basis, per vector i < m, per axis, per welded vertex of the cluster ascending: the
-  // coefficient's index minus its prediction from earlier neighbours (transform_coefficients() in reconstruction.h).
+  // coefficient's index minus its prediction from earlier neighbours (transform_coefficients(), transform_residuals.h).
   std::vector<int32_t> coefficient_symbols;
 
   size_t frame_count() const;

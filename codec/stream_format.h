@@ -68,6 +68,12 @@ constexpr uint64_t kMaxReferenceWindowVertices = uint64_t(1) << 21;
 // hold at most kMaxBasisEntries entries in all (vectors × F: 128 MiB of doubles), the clusters at most
 // kMaxTransformCoefficients coefficients (512 MiB of int32).
 constexpr int64_t kMaxTransformValue = int64_t(1) << 30;
+// Version 4: a cluster uses at most this many basis vectors (the decoder's work per vertex-frame is 3 m products).
+constexpr uint32_t kMaxBasisSize = 256;
+// Version 4: W × F is at most this many times the body's length plus 4 (versions 1 to 3 code a decision per
+// welded vertex-frame, which bounds it so; version 4 codes none, and keeps the bound as a rule so that the bytes
+// still back the frames a decoder is asked to make).
+constexpr uint64_t kMaxVertexFramesPerByte = 364;
 constexpr uint64_t kMaxBasisEntries = uint64_t(1) << 24;
 constexpr uint64_t kMaxTransformCoefficients = uint64_t(1) << 27;
 

@@ -26,9 +26,10 @@ constexpr double kFinestStep = 0.1, kCoarsestStep = 24;
 // A basis vector's estimated price while choosing: its entries at this many bits each, and its step.
 constexpr double kEstimatedBitsPerEntry = 4;
 
-// The basis sizes tried: 0, 1, 2, ... then about 25 % apart.
+// The basis sizes tried: 0, 1, 2, ... then about 25 % apart, up to the format's kMaxBasisSize.
 std::vector<size_t> basis_sizes(size_t most) {
   std::vector<size_t> sizes = {0};
+  most = std::min<size_t>(most, format::kMaxBasisSize);
   for (size_t m = 1; m <= most; m = std::max(m + 1, m * 5 / 4)) sizes.push_back(m);
   return sizes;
 }
@@ -285,6 +286,13 @@ bool transform_content(const EncodeProblem& problem, const StreamContent& conten
       if (o.source == format::kBasisOwn)
         transformed.own_basis[k] = quantized_basis(own_basis[k], o.m, own_energy[k], choice.lambda);
     }
+    // The format's limits on the bases' entries and the coefficients (beyond them, the residual loop stays).
+    uint64_t vectors = choice.stream_vectors, count = 0;
+    for (size_t k = 0; k < clusters; ++k) {
+      if (transformed.basis_source[k] == format::kBasisOwn) vectors += transformed.basis_size[k];
+      count += uint64_t(transformed.basis_size[k]) * members[k].size();  // members: 3 rows per welded vertex
+    }
+    if (vectors * frames > format::kMaxBasisEntries || count > format::kMaxTransformCoefficients) return false;
     // The coefficients: least squares against the basis as the decoder has it, then quantized.
     TransformCoefficients coefficients = transform_layout(transformed);
     bool fits = true;
@@ -306,7 +314,7 @@ bool transform_content(const EncodeProblem& problem, const StreamContent& conten
         }
       }
     }
-    if (!fits || coefficients.values.size() > format::kMaxTransformCoefficients) return false;
+    if (!fits) return false;
     transformed.coefficient_symbols = transform_symbols(transformed, problem.traversal, coefficients);
     // The frames as the decoder makes them, and their error.
     if (!reconstruct_clips(transformed, problem.base, problem.clips[0].triangles, restored).ok()) return false;
@@ -319,7 +327,10 @@ bool transform_content(const EncodeProblem& problem, const StreamContent& conten
     if (error <= budget) {
       stream.clear();
       write_stream(transformed, problem.base, stream);
-      return true;
+      // The format's bound on the frames a stream of its length may claim (a stream of almost no residuals on
+      // many vertices and frames can fall below it).
+      return uint64_t(welded) * frames <=
+             (uint64_t(stream.size() - format::kHeaderBytes) + 4) * format::kMaxVertexFramesPerByte;
     }
     target *= std::pow(budget / error, 1.5) * 0.999;
   }

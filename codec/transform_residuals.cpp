@@ -120,9 +120,13 @@ void TransformResiduals::frame(size_t frame, double* out) const {
   const size_t stream_vectors = content_.stream_basis.size();
   for (size_t w = 0; w < content_.welded_count; ++w) {
     const uint32_t k = content_.labels[w], m = content_.basis_size[k];
-    const double* basis =
-        content_.basis_source[k] == format::kBasisOwn ? &own_[k][frame * m] : &stream_[frame * stream_vectors];
-    const double* c = &scaled_[coefficients_.offset[w]];
+    if (m == 0) {  // no basis: the residuals are zero (and the vectors below may be empty)
+      out[w * 3] = out[w * 3 + 1] = out[w * 3 + 2] = 0.0;
+      continue;
+    }
+    const double* basis = content_.basis_source[k] == format::kBasisOwn ? own_[k].data() + frame * m
+                                                                        : stream_.data() + frame * stream_vectors;
+    const double* c = scaled_.data() + coefficients_.offset[w];
     // The three axes' sums side by side (each in its own order), so that their additions overlap.
     double x = 0.0, y = 0.0, z = 0.0;
     for (uint32_t i = 0; i < m; ++i) {

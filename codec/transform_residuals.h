@@ -36,8 +36,8 @@ Status transform_coefficients(const StreamContent& content, const ResidualTraver
 std::vector<int32_t> transform_symbols(const StreamContent& content, const ResidualTraversal& traversal,
                                        const TransformCoefficients& coefficients);
 
-// The residuals of any frame, from the coefficients and the bases (the content must outlive it; it keeps the
-// coefficients times their steps, 8 bytes each).
+// The residuals of any frame, from the coefficients and the bases (the content and the coefficients must outlive it;
+// it keeps the coefficients times their steps, 8 bytes each).
 class TransformResiduals {
  public:
   TransformResiduals(const StreamContent& content, const TransformCoefficients& coefficients);
