@@ -5,7 +5,6 @@
 #pragma once
 
 #include <Eigen/Dense>
-#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -55,17 +54,6 @@ inline Status residual_trajectories(const char* path, const CodecSettings& setti
                predicted[(frame * welded + w) * 3 + axis]) /
               double(content.residual_step[axis]);
   return status;
-}
-
-// Today's residual scheme on one trajectory (each value quantized to whole steps against the previous value's
-// reconstruction, the stream's closed loop without frame references): its squared error, in steps².
-inline double closed_loop_error(const Matrix& rows, Eigen::Index row) {
-  double reconstructed = 0, error = 0;
-  for (Eigen::Index f = 0; f < rows.cols(); ++f) {
-    reconstructed += std::round(rows(row, f) - reconstructed);
-    error += (rows(row, f) - reconstructed) * (rows(row, f) - reconstructed);
-  }
-  return error;
 }
 
 }  // namespace segmorph::bench

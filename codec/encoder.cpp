@@ -160,24 +160,18 @@ std::vector<FrameSequence> shaped_like(const std::vector<FrameSequence>& clips) 
 }
 
 // Version 4: the residual loop's stream replaced by the transform section's where that is smaller at no more squared
-// error (transform_coding.h).
-void try_transform(const EncodeProblem& problem, const StreamContent& content, std::vector<uint8_t>& stream,
+// error (transform_coding.h). Takes the content over.
+void try_transform(const EncodeProblem& problem, StreamContent&& content, std::vector<uint8_t>& stream,
                    std::vector<FrameSequence>& restored, StreamReport& report) {
   const auto start = EncodeClock::now();
   report_progress(problem.settings, "transform residuals");
-  double budget = 0;
-  for (size_t c = 0; c < restored.size(); ++c)
-    for (size_t i = 0; i < restored[c].positions.size(); ++i) {
-      const double d = double(problem.clips[c].positions[i]) - double(restored[c].positions[i]);
-      budget += d * d;
-    }
-  StreamContent transformed;
   std::vector<uint8_t> candidate;
+  StreamSizes sizes;
   std::vector<FrameSequence> frames;
-  if (transform_content(problem, content, budget, transformed, candidate, frames) && candidate.size() < stream.size()) {
-    StreamSizes sizes;
-    stream.clear();
-    write_stream(transformed, problem.base, stream, &sizes);
+  if (transform_content(problem, std::move(content), squared_error(problem.clips, restored), candidate, sizes,
+                        frames) &&
+      candidate.size() < stream.size()) {
+    stream = std::move(candidate);
     for (size_t c = 0; c < frames.size(); ++c) frames[c].times = restored[c].times;
     restored = std::move(frames);
     report.bytes_motion = sizes.motion;
@@ -234,7 +228,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   for (size_t c = 0; c < clips.size(); ++c) accumulator.add(clips[c], restored[c]);
   report.kg_percent = accumulator.result().kg_percent;
   if (settings.transform_residuals && settings.mode == RateMode::error && !settings.table_residuals)
-    try_transform(problem, content, stream, restored, report);
+    try_transform(problem, std::move(content), stream, restored, report);
   content = StreamContent();  // its residual symbols are as large as the frames
   if (reconstruction) *reconstruction = std::move(restored);
   if (report_out) *report_out = report;

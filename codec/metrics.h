@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <vector>
 
 #include "frame_sequence.h"
 
@@ -35,6 +36,10 @@ struct ErrorMetrics {
 
 // Accumulates pairs of clips (original, decoded; same V and F each) and reports the metrics over all.
 // The diagonal is the first frame of the first original clip.
+// ‖A − Ã‖²_F over every position of every frame of `decoded` against `original` (shaped alike), in doubles, in
+// clip, frame, vertex and axis order.
+double squared_error(const std::vector<FrameSequence>& original, const std::vector<FrameSequence>& decoded);
+
 class ErrorAccumulator {
  public:
   void add(const FrameSequence& original, const FrameSequence& decoded);

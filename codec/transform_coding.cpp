@@ -209,10 +209,16 @@ Matrix basis_values(const StreamContent::Basis& basis, size_t m, size_t frames) 
 
 }  // namespace
 
-bool transform_content(const EncodeProblem& problem, const StreamContent& content, double budget,
-                       StreamContent& transformed, std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored) {
+bool transform_content(const EncodeProblem& problem, StreamContent content, double budget, std::vector<uint8_t>& stream,
+                       StreamSizes& sizes, std::vector<FrameSequence>& restored) {
   const size_t welded = content.welded_count, frames = content.frame_count(), clusters = content.cluster_count;
   if (frames > kMaxTransformFrames || !(budget > 0)) return false;
+  // What every candidate shares: the content without the residual loop (its symbols are as large as the frames).
+  content.flags &= uint8_t(~format::kResidualLoopFlags);
+  content.transform = true;
+  content.residuals = std::vector<int64_t>();
+  content.narrow_residuals = std::vector<int32_t>();
+  for (float& step : content.residual_step) step = 0;
   // The trajectories: row w × 3 + a, the frames' positions minus the prediction of the quantized motion and weights.
   const std::vector<double> predicted = predicted_frames(content, problem.base_welded);
   Matrix rows(Eigen::Index(welded * 3), Eigen::Index(frames));
@@ -257,17 +263,13 @@ bool transform_content(const EncodeProblem& problem, const StreamContent& conten
     for (size_t k = begin; k < end; ++k) prepare(k);
   });
   // Choose, then measure the decoder's frames exactly; tighten the budget until they meet it.
-  const std::vector<size_t> sizes = basis_sizes(frames);
+  const std::vector<size_t> basis_size_list = basis_sizes(frames);
   double target = budget;
+  StreamContent transformed;
   for (int attempt = 0; attempt < 8; ++attempt) {
-    const Choice choice = choose(options, target, sizes, bits_per_vector);
+    const Choice choice = choose(options, target, basis_size_list, bits_per_vector);
     if (std::isinf(choice.bits)) return false;
     transformed = content;
-    transformed.flags &= uint8_t(~format::kResidualLoopFlags);
-    transformed.transform = true;
-    transformed.residuals.clear();
-    transformed.narrow_residuals.clear();
-    for (float& step : transformed.residual_step) step = 0;
     std::vector<double> energy(choice.stream_vectors, 0.0);
     for (size_t k = 0; k < clusters; ++k)
       if (choice.per_cluster[k].source == format::kBasisStream)
@@ -318,15 +320,10 @@ bool transform_content(const EncodeProblem& problem, const StreamContent& conten
     transformed.coefficient_symbols = transform_symbols(transformed, problem.traversal, coefficients);
     // The frames as the decoder makes them, and their error.
     if (!reconstruct_clips(transformed, problem.base, problem.clips[0].triangles, restored).ok()) return false;
-    double error = 0;
-    for (size_t c = 0; c < restored.size(); ++c)
-      for (size_t i = 0; i < restored[c].positions.size(); ++i) {
-        const double d = double(problem.clips[c].positions[i]) - double(restored[c].positions[i]);
-        error += d * d;
-      }
+    const double error = squared_error(problem.clips, restored);
     if (error <= budget) {
       stream.clear();
-      write_stream(transformed, problem.base, stream);
+      write_stream(transformed, problem.base, stream, &sizes);
       // The format's bound on the frames a stream of its length may claim (a stream of almost no residuals on
       // many vertices and frames can fall below it).
       return uint64_t(welded) * frames <=

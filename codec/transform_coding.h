@@ -13,11 +13,12 @@
 
 namespace segmorph {
 
-// From `content` (the residual loop's: its clusters, motion and weights are kept), a version-4 content whose frames
-// have a squared error (over every vertex of every frame, against the problem's clips) of at most `budget`, its
-// stream in `stream` and its frames in `restored` (shaped as the clips). Returns false, leaving the outputs
-// undefined, when none is found (too many frames or coefficients for the format, or the budget not met).
-bool transform_content(const EncodeProblem& problem, const StreamContent& content, double budget,
-                       StreamContent& transformed, std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored);
+// From `content` (the residual loop's, taken over: its clusters, motion and weights are kept, its residual symbols
+// dropped), the stream of a version-4 content whose frames have a squared error (over every vertex of every frame,
+// against the problem's clips) of at most `budget`: in `stream` (`sizes`: its parts), its frames in `restored`
+// (shaped as the clips, without times). Returns false, leaving the outputs undefined, when there is none (too many
+// frames, vectors or coefficients for the format, or the budget not met).
+bool transform_content(const EncodeProblem& problem, StreamContent content, double budget, std::vector<uint8_t>& stream,
+                       StreamSizes& sizes, std::vector<FrameSequence>& restored);
 
 }  // namespace segmorph

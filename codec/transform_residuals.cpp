@@ -33,26 +33,29 @@ SymbolLayout symbol_layout(const StreamContent& content) {
   return layout;
 }
 
-// Walks the traversal: for each welded vertex, axis and vector, the prediction from the earlier neighbours' values
-// (already final), then `code(value, prediction, symbol)` makes the vertex's value final.
+// Walks the traversal: for each welded vertex, axis and vector, the prediction from its earlier neighbours in its
+// cluster (their values already final), then `code(index, prediction, symbol)` makes values[index], the vertex's,
+// final (the callback may write it: `coefficients` is read here, never written).
 template <typename Code>
-bool walk(const StreamContent& content, const ResidualTraversal& traversal, TransformCoefficients& coefficients,
+bool walk(const StreamContent& content, const ResidualTraversal& traversal, const TransformCoefficients& coefficients,
           Code code) {
   const SymbolLayout layout = symbol_layout(content);
+  std::vector<uint64_t> same;  // the offsets of the vertex's earlier neighbours in its cluster
   for (size_t p = 0; p < traversal.order.size(); ++p) {
     const uint32_t w = traversal.order[p], k = content.labels[w], m = content.basis_size[k];
+    if (m == 0) continue;
+    same.clear();
+    for (uint32_t j = traversal.earlier_offset[p]; j < traversal.earlier_offset[p + 1]; ++j) {
+      const uint32_t neighbour = traversal.order[traversal.earlier[j]];
+      if (content.labels[neighbour] == k) same.push_back(coefficients.offset[neighbour]);
+    }
     for (uint32_t a = 0; a < 3; ++a)
       for (uint32_t i = 0; i < m; ++i) {
-        int64_t sum = 0, count = 0;
-        for (uint32_t j = traversal.earlier_offset[p]; j < traversal.earlier_offset[p + 1]; ++j) {
-          const uint32_t neighbour = traversal.order[traversal.earlier[j]];
-          if (content.labels[neighbour] != k) continue;
-          sum += coefficients.values[coefficients.offset[neighbour] + a * m + i];
-          ++count;
-        }
-        const int64_t prediction = count > 0 ? rounded_mean(sum, count) : 0;
+        int64_t sum = 0;
+        for (uint64_t offset : same) sum += coefficients.values[offset + a * m + i];
+        const int64_t prediction = same.empty() ? 0 : rounded_mean(sum, int64_t(same.size()));
         const uint64_t symbol = layout.start[k] + (uint64_t(i) * 3 + a) * layout.members[k] + layout.rank[w];
-        if (!code(coefficients.values[coefficients.offset[w] + a * m + i], prediction, symbol)) return false;
+        if (!code(coefficients.offset[w] + a * m + i, prediction, symbol)) return false;
       }
   }
   return true;
@@ -74,10 +77,10 @@ Status transform_coefficients(const StreamContent& content, const ResidualTraver
                               TransformCoefficients& coefficients) {
   coefficients = transform_layout(content);
   assert(coefficients.values.size() == content.coefficient_symbols.size());
-  const bool ok = walk(content, traversal, coefficients, [&](int32_t& value, int64_t prediction, uint64_t symbol) {
+  const bool ok = walk(content, traversal, coefficients, [&](uint64_t index, int64_t prediction, uint64_t symbol) {
     const int64_t q = prediction + content.coefficient_symbols[size_t(symbol)];
     if (q < -format::kMaxTransformValue || q > format::kMaxTransformValue) return false;
-    value = int32_t(q);
+    coefficients.values[size_t(index)] = int32_t(q);
     return true;
   });
   return ok ? Status::Ok() : Status(StatusCode::bad_data, "animation stream: coefficient out of range");
@@ -86,9 +89,8 @@ Status transform_coefficients(const StreamContent& content, const ResidualTraver
 std::vector<int32_t> transform_symbols(const StreamContent& content, const ResidualTraversal& traversal,
                                        const TransformCoefficients& coefficients) {
   std::vector<int32_t> symbols(coefficients.values.size());
-  TransformCoefficients copy = coefficients;  // walk() reads the values it has made final: here, all of them
-  walk(content, traversal, copy, [&](int32_t& value, int64_t prediction, uint64_t symbol) {
-    symbols[size_t(symbol)] = int32_t(int64_t(value) - prediction);
+  walk(content, traversal, coefficients, [&](uint64_t index, int64_t prediction, uint64_t symbol) {
+    symbols[size_t(symbol)] = int32_t(int64_t(coefficients.values[size_t(index)]) - prediction);
     return true;
   });
   return symbols;

@@ -303,9 +303,9 @@ Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinyglt
       report_progress(progress, "keeping the morph targets was refused (" + status.message() + "); the baked file stands");
       encoded = std::move(baked), status = baked_status;
     } else if (status.ok() && baked_status.ok()) {
-      const size_t kept_size = glb_size(encoded.model), baked_size = glb_size(baked.model);
-      const size_t kept_delivered = glb_delivered_estimate(encoded.model),
-                   baked_delivered = glb_delivered_estimate(baked.model);
+      size_t kept_size = 0, baked_size = 0;
+      const size_t kept_delivered = glb_delivered_estimate(encoded.model, &kept_size),
+                   baked_delivered = glb_delivered_estimate(baked.model, &baked_size);
       const double kept_kg = worst_kg(encoded.report), baked_kg = worst_kg(baked.report);
       char line[200];
       std::snprintf(line, sizeof(line),

@@ -599,14 +599,24 @@ namespace {
 void name_empty_objects(tinygltf::Model& model);
 }  // namespace
 
-size_t glb_size(tinygltf::Model model) {
+namespace {
+
+// The .glb save_gltf would write for `model`, which is repacked as save_gltf repacks it (empty if it cannot be
+// written).
+std::string glb_bytes(tinygltf::Model& model) {
   repack(model);
   shorten_float_numbers(model);
   name_empty_objects(model);  // as save_gltf does: the size is the file's
   tinygltf::TinyGLTF writer;
   writer.SetImageWriter(write_no_image, nullptr);
   std::ostringstream stream;
-  return writer.WriteGltfSceneToStream(&model, stream, false, true) ? stream.str().size() : 0;
+  return writer.WriteGltfSceneToStream(&model, stream, false, true) ? stream.str() : std::string();
+}
+
+}  // namespace
+
+size_t glb_size(tinygltf::Model model) {
+  return glb_bytes(model).size();
 }
 
 double compressed_estimate(const unsigned char* data, size_t count) {
@@ -631,15 +641,10 @@ double compressed_estimate(const unsigned char* data, size_t count) {
   return estimate;
 }
 
-size_t glb_delivered_estimate(tinygltf::Model model) {
-  repack(model);
-  shorten_float_numbers(model);
-  name_empty_objects(model);
-  tinygltf::TinyGLTF writer;
-  writer.SetImageWriter(write_no_image, nullptr);
-  std::ostringstream stream;
-  if (!writer.WriteGltfSceneToStream(&model, stream, false, true)) return 0;
-  const std::string glb = stream.str();
+size_t glb_delivered_estimate(tinygltf::Model model, size_t* size) {
+  const std::string glb = glb_bytes(model);
+  if (size) *size = glb.size();
+  if (glb.empty()) return 0;
   const auto* bytes = reinterpret_cast<const unsigned char*>(glb.data());
   auto u32 = [&](size_t at) {
     return uint32_t(bytes[at]) | uint32_t(bytes[at + 1]) << 8 | uint32_t(bytes[at + 2]) << 16 |

@@ -41,7 +41,8 @@ size_t glb_size(tinygltf::Model model);
 
 // An estimate of those bytes as a web server sends them, after a general-purpose compressor: each buffer view and the
 // JSON at compressed_estimate(). For comparing two encodings of one file, not a prediction of brotli's output.
-size_t glb_delivered_estimate(tinygltf::Model model);
+// `size`, when given, receives glb_size's figure (the file is written once for both).
+size_t glb_delivered_estimate(tinygltf::Model model, size_t* size = nullptr);
 
 // What a general-purpose compressor (brotli, gzip) might make of `count` bytes, cheaply: the least of the bytes
 // themselves, their order-0 entropy as bytes, and their order-0 entropy as 32-bit words plus 4 bytes per distinct
