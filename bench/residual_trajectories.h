@@ -1,7 +1,7 @@
-// What the trajectory bench tools start from: a file's first animated primitive encoded as codec_sequence encodes it
-// (against the stand-in base mesh), and the open-loop residuals of the stream it wrote: each welded vertex's frames
-// minus the prediction of the stream's quantized motion and weights, one trajectory of F values per vertex and axis
-// (needs segmorph_gltf and Eigen).
+// What the trajectory bench tools start from: a file's first animated primitive encoded as codec_sequence
+// --no-transform encodes it (against the stand-in base mesh), and the open-loop residuals of the stream it wrote:
+// each welded vertex's frames minus the prediction of the stream's quantized motion and weights, one trajectory of
+// F values per vertex and axis (needs segmorph_gltf and Eigen).
 #pragma once
 
 #include <Eigen/Dense>
@@ -33,7 +33,9 @@ inline Status residual_trajectories(const char* path, const CodecSettings& setti
   if (status.ok()) {
     out.clips = node.primitives[0].clips;
     out.base = stand_in_base(out.clips[0]);
-    status = encode_animation(out.clips, out.base, settings, out.stream, &out.report);
+    CodecSettings loop = settings;  // the residual loop's residuals are what the tools price (version 4 has none)
+    loop.transform_residuals = false;
+    status = encode_animation(out.clips, out.base, loop, out.stream, &out.report);
   }
   if (status.ok()) status = read_stream(out.stream.data(), out.stream.size(), out.base, out.content);
   if (!status.ok()) return status;
