@@ -14,6 +14,7 @@
 #include "stream.h"
 #include "stream_format.h"
 #include "test_files.h"
+#include "transform_residuals.h"
 
 namespace segmorph {
 namespace {
@@ -267,6 +268,135 @@ TEST(StreamExample, VersionThreeDecodesToTheAppendixFrames) {
       printed += line;
     }
   EXPECT_EQ(printed, kReferenceExampleFrames) << "update kReferenceExampleFrames and spec/bitstream.md 9.7";
+}
+
+// The worked example of version 4 (spec/bitstream.md, section 9.8): the head of section 9's stream (clips, welding,
+// clusters, motion, weights), then the residuals as bases and coefficients: cluster 0 takes the stream's one vector,
+// cluster 1 two of its own.
+constexpr char kTransformExampleHex[] =
+    "53474d410400530000001004"
+    "45d5db1a3c8ed7bc141eada18000000037ee2e161dd2d2d31f1aaf4c3e8b4fa4457ea8dc5c43eabfa71334d7f91f6421984c2dcc3d9802"
+    "dc4948c53212f801af198b1c0f3d1a23669fcf86956f437332a6";
+
+// Its decoded frames: "frame vertex x y z", binary32 bit patterns.
+constexpr char kTransformExampleFrames[] =
+    "0 0 00000000 00000000 00000000\n"
+    "0 1 3f800000 00000000 00000000\n"
+    "0 2 40000000 3b23d70a 00000000\n"
+    "0 3 00000000 3f800000 00000000\n"
+    "0 4 3f800000 3f800000 00000000\n"
+    "0 5 40000000 3f8051ec 00000000\n"
+    "0 6 3f800000 3f800000 00000000\n"
+    "0 7 40000000 00000000 3ba3d70a\n"
+    "1 0 3cd1eb85 00000000 00000000\n"
+    "1 1 3f82c7ae 00000000 3d8a3d71\n"
+    "1 2 400516b8 00000000 3e73851f\n"
+    "1 3 3cfae148 3f800000 3ba3d70a\n"
+    "1 4 3f811c29 3f80a3d7 3d147ae1\n"
+    "1 5 40051eb8 3f800000 3e800000\n"
+    "1 6 3f811c29 3f80a3d7 3d147ae1\n"
+    "1 7 40066666 00000000 3e800000\n"
+    "2 0 3b8f5c28 00000000 00000000\n"
+    "2 1 3f89ba07 00000000 3d28f5c2\n"
+    "2 2 3ff8d148 3b23d70a 3e0e3d71\n"
+    "2 3 3c6b851e 3f800000 3c23d70a\n"
+    "2 4 3f87cda7 3f8147ae 3cd1eb85\n"
+    "2 5 3ffd8bf2 3f8051ec 3e000000\n"
+    "2 6 3f87cda7 3f8147ae 3cd1eb85\n"
+    "2 7 3ff84444 00000000 3e051eb8\n";
+
+// The coefficients the symbols give (spec 8.7.1), per welded vertex: axis by axis, vector by vector.
+// clang-format off
+const std::vector<int32_t> kTransformExampleCoefficients = {
+    2, 0, 0,             // w0 (cluster 0, m = 1): x, y, z
+    2, 0, 1,             // w1
+    4, 0, 0, 1, -1, 0,   // w2 (cluster 1, m = 2): x0 x1, y0 y1, z0 z1
+    3, 0, 1,             // w3
+    -1, 1, 1,            // w4
+    4, 0, 0, 1, 0, 0,    // w5
+    5, 0, 0, 0, 0, 2,    // w6
+};
+// clang-format on
+
+StreamContent transform_example_content() {
+  StreamContent c = example_content();
+  c.flags = 0;
+  c.residual_step[0] = c.residual_step[1] = c.residual_step[2] = 0;
+  c.residuals.clear();
+  c.transform = true;
+  c.stream_basis.step = {0.5f};
+  c.stream_basis.entries = {0, 1, 2};
+  c.basis_source = {format::kBasisStream, format::kBasisOwn};
+  c.basis_size = {1, 2};
+  c.coefficient_step = {0.01f, 0.02f};
+  c.own_basis.resize(2);
+  c.own_basis[1].step = {0.25f, 0.125f};
+  c.own_basis[1].entries = {0, 4, -2, 1, 0, 1};
+  // clang-format off
+  c.coefficient_symbols = {
+      2, 0, 1, -3,  0, 0, 0, 1,  0, 1, 1, 0,   // cluster 0, vector 0: x, y, z of w0, w1, w3, w4
+      4, 0, 1,  0, 0, 0,  -1, 1, 1,            // cluster 1, vector 0: x, y, z of w2, w5, w6
+      0, 0, 0,  1, 0, -1,  0, 0, 2,            // cluster 1, vector 1
+  };
+  // clang-format on
+  return c;
+}
+
+std::vector<uint8_t> transform_written() {
+  std::vector<uint8_t> bytes;
+  write_stream(transform_example_content(), example_base(), bytes);
+  return bytes;
+}
+
+TEST(StreamExample, VersionFourBytesAreTheAppendixBytes) {
+  EXPECT_EQ(hex(transform_written()), kTransformExampleHex) << "update kTransformExampleHex and spec/bitstream.md 9.8";
+}
+
+TEST(StreamExample, VersionFourReadsBackTheContent) {
+  const std::vector<uint8_t> bytes = transform_written();
+  ASSERT_GT(bytes.size(), 5u);
+  EXPECT_EQ(bytes[4], format::kTransformVersion);
+  StreamContent read;
+  const Status status = read_stream(bytes.data(), bytes.size(), example_base(), read);
+  ASSERT_TRUE(status.ok()) << status.message();
+  const StreamContent want = transform_example_content();
+  EXPECT_TRUE(read.transform);
+  EXPECT_EQ(read.flags, want.flags);
+  EXPECT_EQ(read.motion, want.motion);
+  EXPECT_EQ(read.weight_value, want.weight_value);
+  EXPECT_EQ(read.stream_basis.step, want.stream_basis.step);
+  EXPECT_EQ(read.stream_basis.entries, want.stream_basis.entries);
+  EXPECT_EQ(read.basis_source, want.basis_source);
+  EXPECT_EQ(read.basis_size, want.basis_size);
+  EXPECT_EQ(read.coefficient_step, want.coefficient_step);
+  ASSERT_EQ(read.own_basis.size(), 2u);
+  EXPECT_EQ(read.own_basis[1].step, want.own_basis[1].step);
+  EXPECT_EQ(read.own_basis[1].entries, want.own_basis[1].entries);
+  EXPECT_EQ(read.coefficient_symbols, want.coefficient_symbols);
+
+  TransformCoefficients coefficients;
+  ASSERT_TRUE(transform_coefficients(read, residual_traversal(read, example_triangles()), coefficients).ok());
+  EXPECT_EQ(coefficients.values, kTransformExampleCoefficients);
+}
+
+TEST(StreamExample, VersionFourDecodesToTheAppendixFrames) {
+  const std::vector<uint8_t> bytes = transform_written();
+  std::vector<FrameSequence> clips;
+  const Status status = decode_animation(bytes.data(), bytes.size(), example_base(), example_triangles(), clips);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(clips.size(), 2u);
+  std::string printed;
+  size_t frame = 0;
+  for (const FrameSequence& clip : clips)
+    for (size_t j = 0; j < clip.frame_count; ++j, ++frame)
+      for (size_t v = 0; v < 8; ++v) {
+        char line[64];
+        uint32_t bits[3];
+        std::memcpy(bits, clip.frame(j) + v * 3, 12);
+        std::snprintf(line, sizeof(line), "%zu %zu %08x %08x %08x\n", frame, v, bits[0], bits[1], bits[2]);
+        printed += line;
+      }
+  EXPECT_EQ(printed, kTransformExampleFrames) << "update kTransformExampleFrames and spec/bitstream.md 9.8";
 }
 
 }  // namespace
