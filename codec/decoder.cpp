@@ -45,21 +45,26 @@ FrameLoop::FrameLoop(const StreamContent& content, const std::vector<float>& bas
       motion_(dequantized_motion(content, welded_)),
       weights_(dequantized_weights(content)),
       traversal_(residual_traversal(content, triangles)),
-      reconstructor_(content, traversal_),
       predictor_(welded_.data(), motion_, weights_),
       row_(size_t(content.welded_count) * 3),
       predictions_(2 * row_),
-      symbols_(2 * row_),
       welded_frames_(2 * row_),
       to_vertices_(content.welded_index) {
-  if (!content.transform) return;
-  status_ = transform_coefficients(content, traversal_, coefficients_);
+  if (!content.transform) {
+    reconstructor_ = std::make_unique<ResidualReconstructor>(content, traversal_);
+    symbols_.resize(2 * row_);
+    return;
+  }
+  TransformCoefficients coefficients;
+  status_ = transform_coefficients(content, traversal_, coefficients);
   if (!status_.ok()) return;
-  transform_ = std::make_unique<TransformResiduals>(content, coefficients_);
+  transform_ = std::make_unique<TransformResiduals>(content, std::move(coefficients));
   transform_row_.resize(row_);
 }
 
-void FrameLoop::start_clip() { reconstructor_.start_clip(); }
+void FrameLoop::start_clip() {
+  if (reconstructor_) reconstructor_->start_clip();
+}
 
 Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two) {
   const size_t count = two ? 2 : 1;
@@ -87,9 +92,10 @@ Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two
     return [to](size_t i, float x) { to[i] = x; };
   };
   if (two)
-    reconstructor_.two_frames(frame, &predictions_[0], symbol(0), output(0), &predictions_[row_], symbol(1), output(1));
+    reconstructor_->two_frames(frame, &predictions_[0], symbol(0), output(0), &predictions_[row_], symbol(1),
+                               output(1));
   else
-    reconstructor_.frame(frame, &predictions_[0], symbol(0), output(0));
+    reconstructor_->frame(frame, &predictions_[0], symbol(0), output(0));
   for (size_t s = 0; s < count; ++s)
     if (!finite(s)) return not_finite();
   return Status::Ok();
@@ -145,8 +151,12 @@ Status FrameDecoder::open(const uint8_t* data, size_t size, const std::vector<fl
   }
   StreamReader* reader = reader_.get();
   residuals_ = [reader](size_t, int64_t* row) { return reader->read_frame(row); };
-  checkpoints_.resize(content_.clip_frames.size());
-  take_checkpoint();
+  if (content_.transform) {
+    std::vector<int32_t>().swap(content_.coefficient_symbols);  // the loop has made the coefficients from them
+  } else {
+    checkpoints_.resize(content_.clip_frames.size());
+    take_checkpoint();
+  }
   loop_->start_clip();
   return Status::Ok();
 }
@@ -184,7 +194,7 @@ Status FrameDecoder::after_decode(Status status, size_t count) {
       ++clip_;
       frame_in_clip_ = 0;
       if (clip_ < content_.clip_frames.size()) {
-        take_checkpoint();
+        if (!content_.transform) take_checkpoint();
         loop_->start_clip();
       } else {
         status = reader_->finish();
@@ -217,6 +227,12 @@ Status FrameDecoder::seek(size_t clip) {
   if (!failure_.ok()) return failure_;
   if (clip >= content_.clip_frames.size()) return Status(StatusCode::invalid_argument, "no such clip");
   if (clip == clip_ && frame_in_clip_ == 0) return Status::Ok();
+  if (content_.transform) {  // version 4: no frame depends on another, nor on the reader's place (all read)
+    clip_ = clip, frame_in_clip_ = 0, frame_ = 0;
+    for (size_t c = 0; c < clip; ++c) frame_ += content_.clip_frames[c];
+    loop_->start_clip();
+    return Status::Ok();
+  }
   // The nearest checkpoint at or before the clip, unless the decoder is already between it and the clip.
   size_t from = clip;
   while (!checkpoints_[from]) --from;  // checkpoints_[0] always exists

@@ -52,17 +52,16 @@ class FrameLoop {
   AffineMotion motion_;
   ClusterWeights weights_;
   ResidualTraversal traversal_;
-  ResidualReconstructor reconstructor_;
+  std::unique_ptr<ResidualReconstructor> reconstructor_;  // versions 1 to 3 (null in version 4)
   FramePredictor predictor_;
   size_t row_;  // W × 3
   // Two frames at a time (ResidualReconstructor::two_frames), so that what the loop reads in traversal order
   // (predictions, symbols) and writes (welded positions) stays in cache: slot 0 and slot 1.
   std::vector<double> predictions_;
-  std::vector<int64_t> symbols_;
+  std::vector<int64_t> symbols_;  // versions 1 to 3
   std::vector<float> welded_frames_;
   VertexGather to_vertices_;  // welded frames into the base mesh's vertex order
-  // Version 4: the residuals from the coefficients instead of the residual loop (the symbols are not read).
-  TransformCoefficients coefficients_;
+  // Version 4: the residuals from the coefficients instead of the residual loop (no symbols are read).
   std::unique_ptr<TransformResiduals> transform_;
   std::vector<double> transform_row_;
   Status status_;
@@ -98,9 +97,10 @@ class FrameDecoder {
   // The same, appending to `out`.
   Status decode_append(bool two, std::vector<float>& out);
 
-  // Positions the decoder at the first frame of `clip` (< the clip count). A clip start the decoder has passed is
-  // restored from a checkpoint (about 3 bytes per welded vertex, kept while they take at most 64 MiB in all); one
-  // it has not is reached by decoding the frames before it.
+  // Positions the decoder at the first frame of `clip` (< the clip count). Versions 1 to 3: a clip start the decoder
+  // has passed is restored from a checkpoint (about 3 bytes per welded vertex, kept while they take at most 64 MiB
+  // in all); one it has not is reached by decoding the frames before it. Version 4 goes there directly (its frames
+  // depend on none before them), without checking the frames it skips.
   Status seek(size_t clip);
 
   // How many frames of the stream its bytes can hold (StreamReader::frame_bound() after the head).

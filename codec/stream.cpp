@@ -437,8 +437,8 @@ std::vector<std::vector<uint32_t>> identical_position_groups(const std::vector<f
   return ordered;
 }
 
-void write_stream(const StreamContent& content, const std::vector<float>& base, std::vector<uint8_t>& out,
-                  StreamSizes* sizes) {
+Status write_stream_until_invalid(const StreamContent& content, const std::vector<float>& base,
+                                  std::vector<uint8_t>& out, StreamSizes* sizes) {
   const size_t start = out.size();
   out.insert(out.end(), std::begin(format::kMagic), std::end(format::kMagic));
   const bool table = content.flags & format::kFlagTableResiduals;
@@ -457,26 +457,25 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
   RangeEncoder encoder(out);
   Models models;
   HeadWriter writer{encoder};
-  // The walk takes the content by reference for the reader's sake; the writer never writes to it.
-  StreamContent& fields = const_cast<StreamContent&>(content);
-  Status status = code_head(writer, models, base, fields);
-  assert(status.ok());
-  const size_t motion_end = out.size();
-  if (content.transform) {
-    status = code_transform(writer, models, fields);
-    assert(status.ok());
+  auto end_body = [&] {
     encoder.finish();
     const uint32_t length = uint32_t(out.size() - length_at - 4);
     for (int i = 0; i < 4; ++i) out[length_at + size_t(i)] = uint8_t(length >> (8 * i));
+  };
+  // The walk takes the content by reference for the reader's sake; the writer never writes to it.
+  StreamContent& fields = const_cast<StreamContent&>(content);
+  Status status = code_head(writer, models, base, fields);
+  const size_t motion_end = out.size();
+  if (status.ok() && content.transform) status = code_transform(writer, models, fields);
+  if (status.ok() && !content.transform) status = code_residual_steps(writer, fields);
+  if (!status.ok() || content.transform) {
+    end_body();
     if (sizes) {
       sizes->motion = motion_end - start;
       sizes->residuals = out.size() - motion_end;
     }
-    return;
+    return status;
   }
-  status = code_residual_steps(writer, fields);
-  assert(status.ok());
-  (void)status;
 
   const bool lossless = content.flags & format::kFlagLossless;
   assert(!(table && lossless));
@@ -493,14 +492,19 @@ void write_stream(const StreamContent& content, const std::vector<float>& base, 
     encode_residuals(encoder, content.narrow_residuals, content.welded_count, lossless);
   else if (!content.residuals.empty())
     encode_residuals(encoder, content.residuals, content.welded_count, lossless);
-  encoder.finish();
-  const uint32_t length = uint32_t(out.size() - length_at - 4);
-  for (int i = 0; i < 4; ++i) out[length_at + size_t(i)] = uint8_t(length >> (8 * i));
+  end_body();
   out.insert(out.end(), symbols.begin(), symbols.end());
   if (sizes) {
     sizes->motion = motion_end - start;
     sizes->residuals = out.size() - motion_end;
   }
+  return Status::Ok();
+}
+
+void write_stream(const StreamContent& content, const std::vector<float>& base, std::vector<uint8_t>& out,
+                  StreamSizes* sizes) {
+  [[maybe_unused]] const Status status = write_stream_until_invalid(content, base, out, sizes);
+  assert(status.ok());
 }
 
 StreamReader::StreamReader(const uint8_t* data, size_t size) : data_(data), size_(size) {}

@@ -87,6 +87,12 @@ struct StreamSizes {
 void write_stream(const StreamContent& content, const std::vector<float>& base, std::vector<uint8_t>& out,
                   StreamSizes* sizes = nullptr);
 
+// The same for a content that may break a rule of the format, as tests of readers need: the symbols up to and
+// including the first that breaks a rule the walk checks, then the body's end; returns that rule (ok if none broke).
+// write_stream asserts that none does.
+Status write_stream_until_invalid(const StreamContent& content, const std::vector<float>& base,
+                                  std::vector<uint8_t>& out, StreamSizes* sizes = nullptr);
+
 // Parses a stream whose decoder-side facts are `base` (V × 3 floats): V must match, welding groups come from
 // it. Every count is checked against format limits and the data before anything is sized by it.
 Status read_stream(const uint8_t* data, size_t size, const std::vector<float>& base, StreamContent& content);

@@ -1,6 +1,7 @@
 #include "transform_residuals.h"
 
 #include <cassert>
+#include <utility>
 
 #include "stream_format.h"
 
@@ -96,8 +97,8 @@ std::vector<int32_t> transform_symbols(const StreamContent& content, const Resid
   return symbols;
 }
 
-TransformResiduals::TransformResiduals(const StreamContent& content, const TransformCoefficients& coefficients)
-    : content_(content), coefficients_(coefficients), frames_(content.frame_count()) {
+TransformResiduals::TransformResiduals(const StreamContent& content, TransformCoefficients coefficients)
+    : content_(content), offset_(std::move(coefficients.offset)), frames_(content.frame_count()) {
   auto frame_major = [&](const StreamContent::Basis& basis, size_t vectors) {
     std::vector<double> values(frames_ * vectors);
     for (size_t i = 0; i < vectors; ++i)
@@ -109,8 +110,7 @@ TransformResiduals::TransformResiduals(const StreamContent& content, const Trans
   scaled_.resize(coefficients.values.size());
   for (size_t w = 0; w < content.welded_count; ++w) {
     const double step = double(content.coefficient_step[content.labels[w]]);
-    for (uint64_t i = coefficients.offset[w]; i < coefficients.offset[w + 1]; ++i)
-      scaled_[i] = double(coefficients.values[i]) * step;
+    for (uint64_t i = offset_[w]; i < offset_[w + 1]; ++i) scaled_[i] = double(coefficients.values[i]) * step;
   }
   own_.resize(content.cluster_count);
   for (size_t k = 0; k < content.cluster_count; ++k)
@@ -128,7 +128,7 @@ void TransformResiduals::frame(size_t frame, double* out) const {
     }
     const double* basis = content_.basis_source[k] == format::kBasisOwn ? own_[k].data() + frame * m
                                                                         : stream_.data() + frame * stream_vectors;
-    const double* c = scaled_.data() + coefficients_.offset[w];
+    const double* c = scaled_.data() + offset_[w];
     // The three axes' sums side by side (each in its own order), so that their additions overlap.
     double x = 0.0, y = 0.0, z = 0.0;
     for (uint32_t i = 0; i < m; ++i) {

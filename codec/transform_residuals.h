@@ -36,11 +36,11 @@ Status transform_coefficients(const StreamContent& content, const ResidualTraver
 std::vector<int32_t> transform_symbols(const StreamContent& content, const ResidualTraversal& traversal,
                                        const TransformCoefficients& coefficients);
 
-// The residuals of any frame, from the coefficients and the bases (the content and the coefficients must outlive it;
-// it keeps the coefficients times their steps, 8 bytes each).
+// The residuals of any frame, from the coefficients and the bases (the content must outlive it). It takes the
+// coefficients over and keeps their offsets and their products with the steps (8 bytes each), not their indices.
 class TransformResiduals {
  public:
-  TransformResiduals(const StreamContent& content, const TransformCoefficients& coefficients);
+  TransformResiduals(const StreamContent& content, TransformCoefficients coefficients);
 
   // Frame `frame`'s residuals, W × 3 doubles (vertex w, axis a at w × 3 + a): for each, r = 0.0, then for i = 0 ..
   // m − 1, r = r + (double(q_i) × double(D)) × b_i(f), b_i(f) = double(entry) × double(step) of the vector (both
@@ -49,12 +49,12 @@ class TransformResiduals {
 
  private:
   const StreamContent& content_;
-  const TransformCoefficients& coefficients_;
+  std::vector<uint64_t> offset_;  // TransformCoefficients::offset
   size_t frames_;
   // The bases' values frame by frame: the stream's F × G (frame f's at stream_[f × G ..]), each own cluster's F × m.
   std::vector<double> stream_;
   std::vector<std::vector<double>> own_;
-  std::vector<double> scaled_;  // double(q) × double(D) of every coefficient, as TransformCoefficients lays them out
+  std::vector<double> scaled_;  // double(q) × double(D) of every coefficient, laid out by offset_
 };
 
 }  // namespace segmorph

@@ -141,7 +141,7 @@ TEST(TransformResidualsHostile, BrokenStreamsAreRefused) {
   ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
   auto refused = [&](const StreamContent& changed, const char* what) {
     std::vector<uint8_t> stream;
-    write_stream(changed, base, stream);
+    write_stream_until_invalid(changed, base, stream);
     std::vector<FrameSequence> decoded;
     const Status status = decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded);
     EXPECT_FALSE(status.ok()) << what;
