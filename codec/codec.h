@@ -51,6 +51,11 @@ struct CodecSettings {
   // that takes fewer bytes than the residual loop at no more KG error. Error targets (RateMode::error) only, and not
   // with table_residuals.
   bool transform_residuals = true;
+  // With transform_residuals: at most this many rows (a welded vertex's axis over all frames) of each cluster, and of
+  // the whole stream, inform the bases and the choice among them (evenly spaced, each standing for the rows between);
+  // the coefficients of every row are fitted, and the error is the decoder's, whatever the number. It bounds the
+  // time and memory the bases take on large meshes.
+  size_t transform_sample_rows = 32768;
   // Bytes of the output outside this stream (the base mesh, the container) that a bpvf target includes.
   size_t outside_bytes = 0;
   // Threads for the stages that split their work (parallel.h); 0: every hardware thread. The stream is the same

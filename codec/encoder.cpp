@@ -161,18 +161,26 @@ std::vector<FrameSequence> shaped_like(const std::vector<FrameSequence>& clips) 
 
 // Version 4: the residual loop's stream replaced by the transform section's where that is smaller at no more squared
 // error (transform_coding.h). Takes the content over.
-void try_transform(const EncodeProblem& problem, StreamContent&& content, std::vector<uint8_t>& stream,
-                   std::vector<FrameSequence>& restored, StreamReport& report) {
+Status try_transform(const EncodeProblem& problem, StreamContent&& content, std::vector<uint8_t>& stream,
+                     std::vector<FrameSequence>& restored, StreamReport& report) {
   const auto start = EncodeClock::now();
   report_progress(problem.settings, "transform residuals");
   std::vector<uint8_t> candidate;
   StreamSizes sizes;
-  std::vector<FrameSequence> frames;
-  if (transform_content(problem, std::move(content), squared_error(problem.clips, restored), candidate, sizes,
-                        frames) &&
+  if (transform_content(problem, std::move(content), squared_error(problem.clips, restored), candidate, sizes) &&
       candidate.size() < stream.size()) {
+    // Its frames replace the residual loop's: the decoder's, decoded once the others are gone.
+    std::vector<std::vector<float>> times(restored.size());
+    for (size_t c = 0; c < restored.size(); ++c) times[c] = std::move(restored[c].times);
+    restored.clear();
+    std::vector<FrameSequence> frames;
+    const Status decoded =
+        decode_animation(candidate.data(), candidate.size(), problem.base, problem.clips[0].triangles, frames);
+    if (!decoded.ok() || frames.size() != times.size())
+      return Status(StatusCode::internal,
+                    "the version-4 stream the encoder measured does not decode: " + decoded.message());
     stream = std::move(candidate);
-    for (size_t c = 0; c < frames.size(); ++c) frames[c].times = restored[c].times;
+    for (size_t c = 0; c < frames.size(); ++c) frames[c].times = std::move(times[c]);
     restored = std::move(frames);
     report.bytes_motion = sizes.motion;
     report.bytes_residuals = sizes.residuals;
@@ -183,6 +191,7 @@ void try_transform(const EncodeProblem& problem, StreamContent&& content, std::v
     for (double& step : report.residual_steps) step = 0;
   }
   report.ms_entropy += milliseconds_since(start);
+  return Status::Ok();
 }
 
 }  // namespace
@@ -228,7 +237,7 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   for (size_t c = 0; c < clips.size(); ++c) accumulator.add(clips[c], restored[c]);
   report.kg_percent = accumulator.result().kg_percent;
   if (settings.transform_residuals && settings.mode == RateMode::error && !settings.table_residuals)
-    try_transform(problem, std::move(content), stream, restored, report);
+    SEGMORPH_RETURN_IF_ERROR(try_transform(problem, std::move(content), stream, restored, report));
   content = StreamContent();  // its residual symbols are as large as the frames
   if (reconstruction) *reconstruction = std::move(restored);
   if (report_out) *report_out = report;

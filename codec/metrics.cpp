@@ -43,10 +43,7 @@ void add_frame_spread(const float* frame, size_t vertex_count, double& spread) {
 double squared_error(const std::vector<FrameSequence>& original, const std::vector<FrameSequence>& decoded) {
   double error = 0;
   for (size_t c = 0; c < decoded.size(); ++c)
-    for (size_t i = 0; i < decoded[c].positions.size(); ++i) {
-      const double d = double(original[c].positions[i]) - double(decoded[c].positions[i]);
-      error += d * d;
-    }
+    add_squared_error(original[c].positions.data(), decoded[c].positions.data(), decoded[c].positions.size(), error);
   return error;
 }
 

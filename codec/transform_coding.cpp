@@ -6,8 +6,10 @@
 #include <unordered_map>
 
 #include "codec.h"
+#include "frame_decoder.h"
 #include "metrics.h"
 #include "parallel.h"
+#include "prediction.h"
 #include "reconstruction.h"
 #include "stream_format.h"
 #include "transform_residuals.h"
@@ -16,6 +18,8 @@ namespace segmorph {
 namespace {
 
 using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+// The residual trajectories, W × 3 rows of F: floats, as the frames are (half the memory of doubles on large meshes).
+using Rows = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 // Above this many frames the bases' eigenproblems (F × F) are not tried.
 constexpr size_t kMaxTransformFrames = 2048;
@@ -25,6 +29,57 @@ constexpr int kSteps = 24;
 constexpr double kFinestStep = 0.1, kCoarsestStep = 24;
 // A basis vector's estimated price while choosing: its entries at this many bits each, and its step.
 constexpr double kEstimatedBitsPerEntry = 4;
+
+// Evenly spaced entries of `rows`, at most `most` (all of them when there are no more): the rows that inform a basis
+// and its options.
+std::vector<Eigen::Index> sample(const std::vector<Eigen::Index>& rows, size_t most) {
+  if (rows.size() <= most) return rows;
+  std::vector<Eigen::Index> out(most);
+  for (size_t j = 0; j < most; ++j) out[j] = rows[j * rows.size() / most];
+  return out;
+}
+
+// The rows `which` as doubles, with their weights times `scale` (how many rows each stands for).
+void gather(const Rows& rows, const std::vector<double>& weight, const std::vector<Eigen::Index>& which, double scale,
+            Matrix& out, std::vector<double>& out_weight) {
+  out.resize(Eigen::Index(which.size()), rows.cols());
+  out_weight.resize(which.size());
+  for (size_t i = 0; i < which.size(); ++i) {
+    out.row(Eigen::Index(i)) = rows.row(which[i]).cast<double>();
+    out_weight[i] = weight[size_t(which[i])] * scale;
+  }
+}
+
+// The squared error of the frames a decoder makes of a version-4 `content` against the problem's clips, none kept:
+// each frame's sum (as squared_error() sums), then the frames' in order. Version-4 frames depend on none before them,
+// so ranges of them decode on threads of their own. False when the content does not decode.
+bool decoded_error(const EncodeProblem& problem, const StreamContent& content, double& error) {
+  std::vector<const float*> originals;
+  for (const FrameSequence& clip : problem.clips)
+    for (size_t j = 0; j < clip.frame_count; ++j) originals.push_back(clip.frame(j));
+  std::vector<double> frame_error(originals.size(), 0.0);
+  std::vector<char> failed(originals.size(), 0);
+  parallel_ranges(originals.size(), thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
+    FrameLoop loop(content, problem.base, problem.clips[0].triangles);
+    if (!loop.status().ok()) {
+      failed[begin] = 1;
+      return;
+    }
+    std::vector<float> frame(size_t(content.vertex_count) * 3);
+    const FrameLoop::Residuals none;  // version 4 reads no residual symbols
+    for (size_t f = begin; f < end; ++f) {
+      if (!loop.decode(f, none, frame.data(), nullptr).ok()) {
+        failed[f] = 1;
+        return;
+      }
+      add_squared_error(originals[f], frame.data(), frame.size(), frame_error[f]);
+    }
+  });
+  if (std::find(failed.begin(), failed.end(), 1) != failed.end()) return false;
+  error = 0;
+  for (double e : frame_error) error += e;
+  return true;
+}
 
 // The basis sizes tried: 0, 1, 2, ... then about 25 % apart, up to the format's kMaxBasisSize.
 std::vector<size_t> basis_sizes(size_t most) {
@@ -103,9 +158,10 @@ double column_bits(const Matrix& coefficients, Eigen::Index column, double step,
 // The options of one cluster's rows in one basis (coefficients: the rows' projections, by decreasing energy): for
 // each basis size and step, the zeroth-order bits of the quantized coefficients (a histogram per vector) and the
 // squared error (dropped energy plus quantization), each row weighted. Vectors past the point where what is left of
-// the rows' energy is below `negligible` are not tried; `energy` receives the energy of each vector tried.
-void add_options(const Matrix& coefficients, const std::vector<double>& weight, double total, uint32_t source,
-                 double unit, double bits_per_vector, double negligible, std::vector<Option>& options,
+// the rows' energy is below `negligible` are not tried; `energy` receives the energy of each vector tried. The rows
+// may be a sample, each standing for `scale` rows (their weights scaled alike): the bits are scaled by it.
+void add_options(const Matrix& coefficients, const std::vector<double>& weight, double scale, double total,
+                 uint32_t source, double unit, double bits_per_vector, double negligible, std::vector<Option>& options,
                  std::vector<double>& energy) {
   const size_t n = size_t(coefficients.rows());
   energy.clear();
@@ -130,7 +186,8 @@ void add_options(const Matrix& coefficients, const std::vector<double>& weight, 
         quantization += q;
         kept += energy[m];
       }
-      options.push_back({source, m, step, bits + (source == format::kBasisOwn ? double(m) * bits_per_vector : 0) + 40,
+      options.push_back({source, m, step,
+                         bits * scale + (source == format::kBasisOwn ? double(m) * bits_per_vector : 0) + 40,
                          std::max(total - kept, 0.0) + quantization});
     }
   }
@@ -210,7 +267,7 @@ Matrix basis_values(const StreamContent::Basis& basis, size_t m, size_t frames) 
 }  // namespace
 
 bool transform_content(const EncodeProblem& problem, StreamContent content, double budget, std::vector<uint8_t>& stream,
-                       StreamSizes& sizes, std::vector<FrameSequence>& restored) {
+                       StreamSizes& sizes) {
   const size_t welded = content.welded_count, frames = content.frame_count(), clusters = content.cluster_count;
   if (frames > kMaxTransformFrames || !(budget > 0)) return false;
   // What every candidate shares: the content without the residual loop (its symbols are as large as the frames).
@@ -220,43 +277,64 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
   content.narrow_residuals = std::vector<int32_t>();
   for (float& step : content.residual_step) step = 0;
   // The trajectories: row w × 3 + a, the frames' positions minus the prediction of the quantized motion and weights.
-  const std::vector<double> predicted = predicted_frames(content, problem.base_welded);
-  Matrix rows(Eigen::Index(welded * 3), Eigen::Index(frames));
-  for (size_t f = 0; f < frames; ++f)
-    for (size_t i = 0; i < welded * 3; ++i)
-      rows(Eigen::Index(i), Eigen::Index(f)) =
-          double(problem.trajectories.positions[f * welded * 3 + i]) - predicted[f * welded * 3 + i];
+  Rows rows(Eigen::Index(welded * 3), Eigen::Index(frames));
+  {
+    const AffineMotion motion = dequantized_motion(content, problem.base_welded);
+    const ClusterWeights weights = dequantized_weights(content);
+    const FramePredictor predictor(problem.base_welded.data(), motion, weights);
+    std::vector<double> predicted(welded * 3);
+    for (size_t f = 0; f < frames; ++f) {
+      predictor.predict(f, predicted.data());
+      const float* positions = &problem.trajectories.positions[f * welded * 3];
+      for (size_t i = 0; i < welded * 3; ++i)
+        rows(Eigen::Index(i), Eigen::Index(f)) = float(double(positions[i]) - predicted[i]);
+    }
+  }
   std::vector<double> weight(welded * 3);
   for (size_t i = 0; i < weight.size(); ++i) weight[i] = double(problem.multiplicity[i / 3]);
   const double unit = std::sqrt(12 * budget / (3.0 * double(content.vertex_count) * double(frames)));
   const double bits_per_vector = double(frames) * kEstimatedBitsPerEntry + 32;
   const double negligible = budget * 1e-4;  // energy a cluster may leave in vectors not tried
+  const size_t most_rows = problem.settings.transform_sample_rows;
 
-  // Each cluster's rows; the stream's basis and the cluster's own; the options.
+  // Each cluster's rows; the stream's basis and the cluster's own, each from at most most_rows rows; the options.
   std::vector<std::vector<Eigen::Index>> members(clusters);
   for (size_t w = 0; w < welded; ++w)
     for (Eigen::Index a = 0; a < 3; ++a) members[content.labels[w]].push_back(Eigen::Index(w * 3) + a);
-  const Matrix stream_basis = pca_basis(rows, weight, negligible);
+  Matrix stream_basis;
+  {
+    std::vector<Eigen::Index> all(welded * 3);
+    for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
+    const std::vector<Eigen::Index> which = sample(all, most_rows);
+    Matrix sampled;
+    std::vector<double> sampled_weight;
+    gather(rows, weight, which, double(all.size()) / double(which.size()), sampled, sampled_weight);
+    stream_basis = pca_basis(sampled, sampled_weight, negligible);
+  }
   std::vector<Matrix> own_basis(clusters);
   std::vector<std::vector<double>> own_energy(clusters), stream_energy(clusters);
   std::vector<std::vector<Option>> options(clusters);
   auto prepare = [&](size_t k) {
-    Matrix own(Eigen::Index(members[k].size()), Eigen::Index(frames));
-    std::vector<double> own_weight(members[k].size());
-    double total = 0;
-    for (size_t i = 0; i < members[k].size(); ++i) {
-      own.row(Eigen::Index(i)) = rows.row(members[k][i]);
-      own_weight[i] = weight[size_t(members[k][i])];
-      total += own_weight[i] * own.row(Eigen::Index(i)).squaredNorm();
+    if (members[k].empty()) {
+      options[k].push_back({format::kBasisNone, 0, 0, 8, 0.0});
+      return;
     }
+    // The energy the options leave is the sample's less what they keep of it: both from the same rows, whose
+    // estimate of the cluster's is then unbiased (the sample's share of the whole is not).
+    const std::vector<Eigen::Index> which = sample(members[k], most_rows);
+    const double scale = double(members[k].size()) / double(which.size());
+    Matrix own;
+    std::vector<double> own_weight;
+    gather(rows, weight, which, scale, own, own_weight);
+    double total = 0;
+    for (size_t i = 0; i < which.size(); ++i) total += own_weight[i] * own.row(Eigen::Index(i)).squaredNorm();
     options[k].push_back({format::kBasisNone, 0, 0, 8, total});
-    if (members[k].empty()) return;
     const Matrix in_stream = own * stream_basis.transpose();
-    add_options(in_stream, own_weight, total, format::kBasisStream, unit, bits_per_vector, negligible, options[k],
-                stream_energy[k]);
+    add_options(in_stream, own_weight, scale, total, format::kBasisStream, unit, bits_per_vector, negligible,
+                options[k], stream_energy[k]);
     own_basis[k] = pca_basis(own, own_weight, negligible);
     const Matrix in_own = own * own_basis[k].transpose();
-    add_options(in_own, own_weight, total, format::kBasisOwn, unit, bits_per_vector, negligible, options[k],
+    add_options(in_own, own_weight, scale, total, format::kBasisOwn, unit, bits_per_vector, negligible, options[k],
                 own_energy[k]);
   };
   parallel_ranges(clusters, thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
@@ -297,8 +375,7 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
     if (vectors * frames > format::kMaxBasisEntries || count > format::kMaxTransformCoefficients) return false;
     // The coefficients: least squares against the basis as the decoder has it, then quantized.
     TransformCoefficients coefficients = transform_layout(transformed);
-    bool fits = true;
-    for (size_t k = 0; k < clusters && fits; ++k) {
+    for (size_t k = 0; k < clusters; ++k) {
       const size_t m = transformed.basis_size[k];
       if (m == 0) continue;
       const Matrix values = transformed.basis_source[k] == format::kBasisOwn
@@ -306,21 +383,25 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
                                 : Matrix(stream_values.topRows(Eigen::Index(m)));
       const Eigen::LDLT<Eigen::MatrixXd> gram(values * values.transpose());
       const double step = double(transformed.coefficient_step[k]);
-      for (Eigen::Index r : members[k]) {
-        const Eigen::VectorXd c = gram.solve(Eigen::VectorXd(values * rows.row(r).transpose()));
-        const size_t w = size_t(r) / 3, a = size_t(r) % 3;
-        for (size_t i = 0; i < m; ++i) {
-          const double q = std::round(c(Eigen::Index(i)) / step);
-          if (!(std::abs(q) <= double(format::kMaxTransformValue))) fits = false;
-          coefficients.values[coefficients.offset[w] + a * m + i] = fits ? int32_t(q) : 0;
+      std::vector<char> fits(members[k].size(), 1);  // per row: every coefficient within the format's limit
+      parallel_ranges(members[k].size(), thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
+        for (size_t j = begin; j < end; ++j) {
+          const Eigen::Index r = members[k][j];
+          const Eigen::VectorXd c = gram.solve(Eigen::VectorXd(values * rows.row(r).transpose().cast<double>()));
+          const size_t w = size_t(r) / 3, a = size_t(r) % 3;
+          for (size_t i = 0; i < m; ++i) {
+            const double q = std::round(c(Eigen::Index(i)) / step);
+            if (!(std::abs(q) <= double(format::kMaxTransformValue))) fits[j] = 0;
+            coefficients.values[coefficients.offset[w] + a * m + i] = fits[j] ? int32_t(q) : 0;
+          }
         }
-      }
+      });
+      if (std::find(fits.begin(), fits.end(), 0) != fits.end()) return false;
     }
-    if (!fits) return false;
     transformed.coefficient_symbols = transform_symbols(transformed, problem.traversal, coefficients);
     // The frames as the decoder makes them, and their error.
-    if (!reconstruct_clips(transformed, problem.base, problem.clips[0].triangles, restored).ok()) return false;
-    const double error = squared_error(problem.clips, restored);
+    double error = 0;
+    if (!decoded_error(problem, transformed, error)) return false;
     if (error <= budget) {
       stream.clear();
       write_stream(transformed, problem.base, stream, &sizes);
@@ -329,7 +410,9 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
       return uint64_t(welded) * frames <=
              (uint64_t(stream.size() - format::kHeaderBytes) + 4) * format::kMaxVertexFramesPerByte;
     }
-    target *= std::pow(budget / error, 1.5) * 0.999;
+    // Tighter by the miss, and at least below the estimate of this choice scaled by it: a choice that does not
+    // change would miss again (an estimate from a sample can miss by more than the first factor moves it).
+    target = std::min(target * std::pow(budget / error, 1.5), choice.error * (budget / error)) * 0.999;
   }
   return false;
 }

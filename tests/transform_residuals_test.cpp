@@ -94,6 +94,26 @@ TEST(TransformResiduals, OneOrTwoFramesAtATimeAndAfterASeekAreTheEncodersFrames)
   }
 }
 
+// With the bases and options estimated from a sample of each cluster's rows (as on large meshes), the transform is
+// still chosen, meets the residual loop's error, and its stream is within a few per cent of the one from every row.
+TEST(TransformResiduals, ASampleOfTheRowsChoosesAsWell) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  for (double target : {0.15, 0.5}) {
+    SCOPED_TRACE(target);
+    CodecSettings sampled = error(target);
+    sampled.transform_sample_rows = 300;  // of 1926 rows, about 110 to 520 a cluster
+    const Encoded all = encode(clips, base, error(target)), some = encode(clips, base, sampled),
+                  loop = encode(clips, base, residual_loop(error(target)));
+    ASSERT_EQ(some.stream[4], format::kTransformVersion);
+    EXPECT_LE(kg(clips, some.reconstruction), kg(clips, loop.reconstruction) * (1 + 1e-12));
+    EXPECT_LT(double(some.stream.size()), double(all.stream.size()) * 1.05);
+    std::vector<FrameSequence> decoded;
+    ASSERT_TRUE(decode_animation(some.stream.data(), some.stream.size(), base, clips[0].triangles, decoded).ok());
+    for (size_t c = 0; c < clips.size(); ++c) EXPECT_EQ(decoded[c].positions, some.reconstruction[c].positions);
+  }
+}
+
 // The coefficients' symbols and the coefficients are each other's inverse through the traversal's prediction.
 TEST(TransformResiduals, SymbolsAndCoefficientsAreInverse) {
   const std::vector<FrameSequence> clips = two_clips();
