@@ -54,7 +54,7 @@ struct CodecSettings {
   // With transform_residuals: at most this many rows (a welded vertex's axis over all frames) of each cluster, and of
   // the whole stream, inform the bases and the choice among them (evenly spaced, each standing for the rows between);
   // the coefficients of every row are fitted, and the error is the decoder's, whatever the number. It bounds the
-  // time and memory the bases take on large meshes.
+  // time and memory the bases take on large meshes. At least 3 (a vertex's three axes are sampled together).
   size_t transform_sample_rows = 32768;
   // Bytes of the output outside this stream (the base mesh, the container) that a bpvf target includes.
   size_t outside_bytes = 0;

@@ -202,6 +202,8 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   SEGMORPH_RETURN_IF_ERROR(check_input(clips, base));
   if (settings.mode != RateMode::lossless && !(settings.target > 0))
     return Status(StatusCode::invalid_argument, "the rate target must be positive");
+  if (settings.transform_sample_rows < 3)
+    return Status(StatusCode::invalid_argument, "transform_sample_rows must be at least 3 (one vertex)");
   StreamReport report;
   EncodeProblem problem(clips, base, settings);
   StreamContent content;

@@ -30,12 +30,18 @@ constexpr double kFinestStep = 0.1, kCoarsestStep = 24;
 // A basis vector's estimated price while choosing: its entries at this many bits each, and its step.
 constexpr double kEstimatedBitsPerEntry = 4;
 
-// Evenly spaced entries of `rows`, at most `most` (all of them when there are no more): the rows that inform a basis
-// and its options.
+// Evenly spaced vertices of `rows` (their three axes' rows side by side, as members and the stream list them), at most
+// `most` rows in all (all of them when there are no more): the rows that inform a basis and its options. Whole
+// vertices, so that no stride can pick one axis only.
 std::vector<Eigen::Index> sample(const std::vector<Eigen::Index>& rows, size_t most) {
   if (rows.size() <= most) return rows;
-  std::vector<Eigen::Index> out(most);
-  for (size_t j = 0; j < most; ++j) out[j] = rows[j * rows.size() / most];
+  const uint64_t vertices = rows.size() / 3, picked = std::max<size_t>(most / 3, 1);
+  std::vector<Eigen::Index> out;
+  out.reserve(size_t(picked) * 3);
+  for (uint64_t j = 0; j < picked; ++j) {
+    const size_t first = size_t(j * vertices / picked) * 3;
+    out.insert(out.end(), rows.begin() + ptrdiff_t(first), rows.begin() + ptrdiff_t(first + 3));
+  }
   return out;
 }
 
@@ -51,15 +57,20 @@ void gather(const Rows& rows, const std::vector<double>& weight, const std::vect
 }
 
 // The squared error of the frames a decoder makes of a version-4 `content` against the problem's clips, none kept:
-// each frame's sum (as squared_error() sums), then the frames' in order. Version-4 frames depend on none before them,
-// so ranges of them decode on threads of their own. False when the content does not decode.
+// each frame's sum (in squared_error()'s order within the frame), then the frames' in order. Version-4 frames depend
+// on none before them, so ranges of them decode on threads of their own, each with a decoder of its own (8 bytes per
+// coefficient): on one thread when that would take more than 256 MiB a thread. False when the content does not
+// decode.
 bool decoded_error(const EncodeProblem& problem, const StreamContent& content, double& error) {
   std::vector<const float*> originals;
   for (const FrameSequence& clip : problem.clips)
     for (size_t j = 0; j < clip.frame_count; ++j) originals.push_back(clip.frame(j));
   std::vector<double> frame_error(originals.size(), 0.0);
   std::vector<char> failed(originals.size(), 0);
-  parallel_ranges(originals.size(), thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
+  const size_t threads = content.coefficient_symbols.size() * sizeof(double) > (size_t(256) << 20)
+                             ? 1
+                             : thread_count(problem.settings.threads);
+  parallel_ranges(originals.size(), threads, [&](size_t begin, size_t end) {
     FrameLoop loop(content, problem.base, problem.clips[0].triangles);
     if (!loop.status().ok()) {
       failed[begin] = 1;
@@ -412,7 +423,9 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
     }
     // Tighter by the miss, and at least below the estimate of this choice scaled by it: a choice that does not
     // change would miss again (an estimate from a sample can miss by more than the first factor moves it).
-    target = std::min(target * std::pow(budget / error, 1.5), choice.error * (budget / error)) * 0.999;
+    target *= std::pow(budget / error, 1.5);
+    if (choice.error > 0) target = std::min(target, choice.error * (budget / error));
+    target *= 0.999;
   }
   return false;
 }

@@ -112,6 +112,10 @@ TEST(TransformResiduals, ASampleOfTheRowsChoosesAsWell) {
     ASSERT_TRUE(decode_animation(some.stream.data(), some.stream.size(), base, clips[0].triangles, decoded).ok());
     for (size_t c = 0; c < clips.size(); ++c) EXPECT_EQ(decoded[c].positions, some.reconstruction[c].positions);
   }
+  CodecSettings none = error(0.15);
+  none.transform_sample_rows = 2;  // less than a vertex
+  std::vector<uint8_t> stream;
+  EXPECT_EQ(encode_animation(clips, base, none, stream).code(), StatusCode::invalid_argument);
 }
 
 // The coefficients' symbols and the coefficients are each other's inverse through the traversal's prediction.
