@@ -227,10 +227,13 @@ Status FrameDecoder::seek(size_t clip) {
   if (!failure_.ok()) return failure_;
   if (clip >= content_.clip_frames.size()) return Status(StatusCode::invalid_argument, "no such clip");
   if (clip == clip_ && frame_in_clip_ == 0) return Status::Ok();
-  if (content_.transform) {  // version 4: no frame depends on another, nor on the reader's place (all read)
-    clip_ = clip, frame_in_clip_ = 0, frame_ = 0;
-    for (size_t c = 0; c < clip; ++c) frame_ += content_.clip_frames[c];
+  auto start_at = [&](size_t start) {  // the decoder at the first frame of clip `start`
+    clip_ = start, frame_in_clip_ = 0, frame_ = 0;
+    for (size_t c = 0; c < start; ++c) frame_ += content_.clip_frames[c];
     loop_->start_clip();
+  };
+  if (content_.transform) {  // version 4: no frame depends on another, nor on the reader's place (all read)
+    start_at(clip);
     return Status::Ok();
   }
   // The nearest checkpoint at or before the clip, unless the decoder is already between it and the clip.
@@ -238,10 +241,7 @@ Status FrameDecoder::seek(size_t clip) {
   while (!checkpoints_[from]) --from;  // checkpoints_[0] always exists
   if (!(clip_ >= from && clip_ < clip)) {
     reader_->restore(*checkpoints_[from]);
-    size_t frame = 0;
-    for (size_t c = 0; c < from; ++c) frame += content_.clip_frames[c];
-    clip_ = from, frame_in_clip_ = 0, frame_ = frame;
-    loop_->start_clip();
+    start_at(from);
   }
   while (clip_ < clip) SEGMORPH_RETURN_IF_ERROR(skip_frame());
   return Status::Ok();

@@ -34,8 +34,6 @@ struct ErrorMetrics {
   double max_error_over_diagonal = 0;
 };
 
-// Accumulates pairs of clips (original, decoded; same V and F each) and reports the metrics over all.
-// The diagonal is the first frame of the first original clip.
 // ‖A − Ã‖²_F over every position of every frame of `decoded` against `original` (shaped alike), in doubles, in
 // clip, frame, vertex and axis order.
 double squared_error(const std::vector<FrameSequence>& original, const std::vector<FrameSequence>& decoded);
@@ -48,6 +46,8 @@ inline void add_squared_error(const float* original, const float* decoded, size_
   }
 }
 
+// Accumulates pairs of clips (original, decoded; same V and F each) and reports the metrics over all.
+// The diagonal is the first frame of the first original clip.
 class ErrorAccumulator {
  public:
   void add(const FrameSequence& original, const FrameSequence& decoded);

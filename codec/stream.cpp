@@ -457,23 +457,26 @@ Status write_stream_until_invalid(const StreamContent& content, const std::vecto
   RangeEncoder encoder(out);
   Models models;
   HeadWriter writer{encoder};
-  auto end_body = [&] {
+  size_t motion_end = 0;
+  // Ends the body, appends what follows it (the table code's words) and reports the sizes.
+  auto end_stream = [&](const std::vector<uint8_t>& after) {
     encoder.finish();
     const uint32_t length = uint32_t(out.size() - length_at - 4);
     for (int i = 0; i < 4; ++i) out[length_at + size_t(i)] = uint8_t(length >> (8 * i));
-  };
-  // The walk takes the content by reference for the reader's sake; the writer never writes to it.
-  StreamContent& fields = const_cast<StreamContent&>(content);
-  Status status = code_head(writer, models, base, fields);
-  const size_t motion_end = out.size();
-  if (status.ok() && content.transform) status = code_transform(writer, models, fields);
-  if (status.ok() && !content.transform) status = code_residual_steps(writer, fields);
-  if (!status.ok() || content.transform) {
-    end_body();
+    out.insert(out.end(), after.begin(), after.end());
     if (sizes) {
       sizes->motion = motion_end - start;
       sizes->residuals = out.size() - motion_end;
     }
+  };
+  // The walk takes the content by reference for the reader's sake; the writer never writes to it.
+  StreamContent& fields = const_cast<StreamContent&>(content);
+  Status status = code_head(writer, models, base, fields);
+  motion_end = out.size();
+  if (status.ok() && content.transform) status = code_transform(writer, models, fields);
+  if (status.ok() && !content.transform) status = code_residual_steps(writer, fields);
+  if (!status.ok() || content.transform) {
+    end_stream({});
     return status;
   }
 
@@ -492,12 +495,7 @@ Status write_stream_until_invalid(const StreamContent& content, const std::vecto
     encode_residuals(encoder, content.narrow_residuals, content.welded_count, lossless);
   else if (!content.residuals.empty())
     encode_residuals(encoder, content.residuals, content.welded_count, lossless);
-  end_body();
-  out.insert(out.end(), symbols.begin(), symbols.end());
-  if (sizes) {
-    sizes->motion = motion_end - start;
-    sizes->residuals = out.size() - motion_end;
-  }
+  end_stream(symbols);
   return Status::Ok();
 }
 

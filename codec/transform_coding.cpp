@@ -9,7 +9,7 @@
 #include "frame_decoder.h"
 #include "metrics.h"
 #include "parallel.h"
-#include "prediction.h"
+#include "rate_control.h"
 #include "reconstruction.h"
 #include "stream_format.h"
 #include "transform_residuals.h"
@@ -290,12 +290,10 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
   // The trajectories: row w × 3 + a, the frames' positions minus the prediction of the quantized motion and weights.
   Rows rows(Eigen::Index(welded * 3), Eigen::Index(frames));
   {
-    const AffineMotion motion = dequantized_motion(content, problem.base_welded);
-    const ClusterWeights weights = dequantized_weights(content);
-    const FramePredictor predictor(problem.base_welded.data(), motion, weights);
+    const FramePredictions predictions(content, problem.base_welded);
     std::vector<double> predicted(welded * 3);
     for (size_t f = 0; f < frames; ++f) {
-      predictor.predict(f, predicted.data());
+      predictions.predict(f, predicted.data());
       const float* positions = &problem.trajectories.positions[f * welded * 3];
       for (size_t i = 0; i < welded * 3; ++i)
         rows(Eigen::Index(i), Eigen::Index(f)) = float(double(positions[i]) - predicted[i]);

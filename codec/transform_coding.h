@@ -16,9 +16,9 @@ namespace segmorph {
 // From `content` (the residual loop's, taken over: its clusters, motion and weights are kept, its residual symbols
 // dropped), the stream of a version-4 content whose frames have a squared error (over every vertex of every frame,
 // against the problem's clips) of at most `budget`: in `stream` (`sizes`: its parts). The bases and the options
-// are estimated from at most settings.transform_sample_rows rows of each cluster (evenly spaced); every row's
-// coefficients are fitted, and the error is the decoder's frames'. Returns false, leaving the outputs undefined, when
-// there is none (too many frames, vectors or coefficients for the format, or the budget not met).
+// are estimated from at most settings.transform_sample_rows rows of each cluster (whole vertices, evenly spaced); every
+// row's coefficients are fitted, and the error is the decoder's frames'. Returns false, leaving the outputs undefined,
+// when there is none (too many frames, vectors or coefficients for the format, or the budget not met).
 bool transform_content(const EncodeProblem& problem, StreamContent content, double budget, std::vector<uint8_t>& stream,
                        StreamSizes& sizes);
 
