@@ -160,7 +160,7 @@ const Option kOptions[] = {
      [](CommandLine& line, const std::string&, double number) { line.encode.clusters = size_t(number); }},
     {"--position-bits", nullptr, "B", kEncode, Kind::whole, 8, 22, false, nullptr, 0,
      "Draco quantization bits of the base mesh positions, {range} (default: from the error target and the frame "
-     "count, at least 11; 14 with --bpvf or --lossless)",
+     "count, at least 10; 14 with --bpvf or --lossless)",
      [](CommandLine& line, const std::string&, double number) { line.encode.position_bits = int(number); }},
     {"--normal-bits", nullptr, "B", kEncode, Kind::whole, 4, 16, false, nullptr, 0,
      "Draco quantization bits of the base mesh normals, {range} (default 8)",

@@ -526,6 +526,17 @@ TEST(Cli, BaseMeshPrecisionFollowsTheErrorTarget) {
   EXPECT_LT(coarse, fine);
   EXPECT_EQ(draco_bytes("--error 1 --position-bits 16"), draco_bytes("--error 0.01 --position-bits 16"));
   EXPECT_LT(draco_bytes("--error 1 --position-bits 12"), draco_bytes("--error 1 --position-bits 16"));
+  // A sequence's base is at least 10 bits (--help), however coarse the target: the waving flag's cache, coded as
+  // frames, at --error 5, where the rule alone would take fewer.
+  const std::string flag = sample("WavingFlag/flag.obj") + " --cache " + sample("WavingFlag/flag.pc2");
+  auto flag_draco_bytes = [&](const std::string& options) {
+    const Result result = run("encode -q " + flag + " -o " + directory + "/flag.glb --json --error 5 " + options);
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_NE(result.out.find("\"mode\":\"frames\""), std::string::npos) << result.out;
+    return json_number(result.out, "draco_bytes");
+  };
+  EXPECT_EQ(flag_draco_bytes(""), flag_draco_bytes("--position-bits 10"));
+  EXPECT_NE(flag_draco_bytes(""), flag_draco_bytes("--position-bits 9"));
 }
 
 // The automatic cluster count comes within 2 % of the best of the counts it could pick from on the bundled Fox
