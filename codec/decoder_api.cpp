@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "frame_decoder.h"
+#include "playback_model.h"
 #include "stream_format.h"
 #include "track_coding.h"
 #include "track_format.h"
@@ -82,6 +83,8 @@ struct AnimationDecoder::State {
   std::vector<float> pending;
   bool has_pending = false;
   size_t pending_clip = 0, pending_frame = 0;
+  // The version-4 model in float32, made when first asked for.
+  std::unique_ptr<PlaybackModel> model;
 };
 
 AnimationDecoder::AnimationDecoder() = default;
@@ -217,6 +220,150 @@ Status AnimationDecoder::decode_frame(float* destination, size_t destination_flo
     state.pending_clip = clip, state.pending_frame = frame;
     return Status::Ok();
   });
+}
+
+namespace {
+
+Status short_destination(const char* what, size_t given, size_t needed) {
+  return invalid(std::string(what) + " holds " + std::to_string(given) + " values, the model needs " +
+                 std::to_string(needed));
+}
+
+}  // namespace
+
+Status AnimationDecoder::make_model() {
+  if (!state_) return invalid("no stream is open");
+  State& state = *state_;
+  if (!state.decoder.content().transform)
+    return Status(StatusCode::unsupported, "the stream is version " + std::to_string(state.decoder.version()) +
+                                               ": its frames depend on earlier frames' residuals, only version-4 "
+                                               "streams have a model (decode frames instead)");
+  if (state.model) return Status::Ok();
+  return guarded([&] {
+    state.model = std::make_unique<PlaybackModel>(playback_model(state.decoder.content(), state.decoder.loop()));
+    return Status::Ok();
+  });
+}
+
+Status AnimationDecoder::model_info(ModelInfo& info) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  const PlaybackModel& model = *state_->model;
+  info.vertex_count = model.vertex_count;
+  info.welded_count = model.welded_count;
+  info.cluster_count = model.cluster_count;
+  info.frame_count = model.frame_count;
+  info.basis_count = model.basis_count;
+  info.coefficient_count = model.coefficients.size() / 3;
+  info.max_basis_size = model.max_basis_size;
+  info.max_pairs = model.max_pairs;
+  return Status::Ok();
+}
+
+Status AnimationDecoder::model_welded(uint32_t* destination, size_t count) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  const PlaybackModel& model = *state_->model;
+  if (!destination) return invalid("the destination is null");
+  if (count < model.welded.size()) return short_destination("the destination", count, model.welded.size());
+  std::copy(model.welded.begin(), model.welded.end(), destination);
+  return Status::Ok();
+}
+
+Status AnimationDecoder::model_weights(uint32_t* clusters, float* weights, size_t count) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  const PlaybackModel& model = *state_->model;
+  if (!clusters || !weights) return invalid("a destination is null");
+  if (count < model.pair_cluster.size()) return short_destination("the destination", count, model.pair_cluster.size());
+  std::copy(model.pair_cluster.begin(), model.pair_cluster.end(), clusters);
+  std::copy(model.pair_weight.begin(), model.pair_weight.end(), weights);
+  return Status::Ok();
+}
+
+Status AnimationDecoder::model_clusters(float* centroids, uint32_t* bases, size_t cluster_count) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  const PlaybackModel& model = *state_->model;
+  if (!centroids || !bases) return invalid("a destination is null");
+  if (cluster_count < model.cluster_count) return short_destination("the destination", cluster_count, model.cluster_count);
+  std::copy(model.centroid.begin(), model.centroid.end(), centroids);
+  std::copy(model.cluster_basis.begin(), model.cluster_basis.end(), bases);
+  return Status::Ok();
+}
+
+Status AnimationDecoder::model_coefficients(uint32_t* offsets, size_t offset_count, float* coefficients,
+                                            size_t float_count) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  const PlaybackModel& model = *state_->model;
+  if (!offsets || (!coefficients && !model.coefficients.empty())) return invalid("a destination is null");
+  if (offset_count < model.coefficient_offset.size())
+    return short_destination("the offsets' destination", offset_count, model.coefficient_offset.size());
+  if (float_count < model.coefficients.size())
+    return short_destination("the coefficients' destination", float_count, model.coefficients.size());
+  std::copy(model.coefficient_offset.begin(), model.coefficient_offset.end(), offsets);
+  std::copy(model.coefficients.begin(), model.coefficients.end(), coefficients);
+  return Status::Ok();
+}
+
+namespace {
+
+// Frames first .. first + count − 1 of `frames`, `per_frame` values each, into a destination of `floats`.
+Status frame_range(size_t first, size_t count, size_t frames, size_t per_frame, const float* destination,
+                   size_t floats) {
+  if (first > frames || count > frames - first)
+    return invalid("frames " + std::to_string(first) + " to " + std::to_string(first) + " + " + std::to_string(count) +
+                   " are not all in the stream's " + std::to_string(frames));
+  if (!destination && count * per_frame > 0) return invalid("the destination is null");
+  if (floats < count * per_frame) return short_destination("the destination", floats, count * per_frame);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status AnimationDecoder::model_motion(size_t first_frame, size_t frame_count, float* destination,
+                                      size_t destination_floats) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  State& state = *state_;
+  const PlaybackModel& model = *state.model;
+  SEGMORPH_RETURN_IF_ERROR(frame_range(first_frame, frame_count, model.frame_count, model.cluster_count * 12,
+                                       destination, destination_floats));
+  if (frame_count > 0) playback_motion(state.decoder.loop(), first_frame, frame_count, destination);
+  return Status::Ok();
+}
+
+Status AnimationDecoder::model_basis(size_t first_frame, size_t frame_count, float* destination,
+                                     size_t destination_floats) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  State& state = *state_;
+  const PlaybackModel& model = *state.model;
+  SEGMORPH_RETURN_IF_ERROR(
+      frame_range(first_frame, frame_count, model.frame_count, model.basis_count, destination, destination_floats));
+  if (frame_count > 0)
+    playback_basis(model, state.decoder.content(), state.decoder.loop(), first_frame, frame_count, destination);
+  return Status::Ok();
+}
+
+Status AnimationDecoder::model_bounds(float box[6]) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  State& state = *state_;
+  const PlaybackModel& model = *state.model;
+  if (!box) return invalid("the box is null");
+  return guarded([&] {
+    playback_bounds(model, state.decoder.content(), state.decoder.loop(), state.base.data(), box);
+    return Status::Ok();
+  });
+}
+
+Status AnimationDecoder::evaluate_model(const float* motion, size_t motion_floats, const float* basis,
+                                        size_t basis_floats, float* positions, size_t position_floats) {
+  SEGMORPH_RETURN_IF_ERROR(make_model());
+  State& state = *state_;
+  const PlaybackModel& model = *state.model;
+  if (!motion || (!basis && model.basis_count > 0) || !positions) return invalid("a parameter or the destination is null");
+  if (motion_floats < model.cluster_count * 12)
+    return short_destination("the motion", motion_floats, model.cluster_count * 12);
+  if (basis_floats < model.basis_count) return short_destination("the basis values", basis_floats, model.basis_count);
+  if (position_floats < model.vertex_count * 3)
+    return short_destination("the destination", position_floats, model.vertex_count * 3);
+  evaluate_playback_model(model, state.base.data(), motion, basis, positions);
+  return Status::Ok();
 }
 
 size_t track_stream_floats(const size_t* time_counts, size_t time_array_count, const TrackSamplerLayout* samplers,

@@ -155,6 +155,65 @@ segmorph_status segmorph_decoder_seek(segmorph_decoder* decoder, size_t clip) {
   return report(decoder, decoder->decoder.seek(clip));
 }
 
+segmorph_status segmorph_decoder_model_info(segmorph_decoder* decoder, segmorph_model_info* info) {
+  if (!decoder) return null_decoder();
+  if (!info) return report(decoder, segmorph::Status(segmorph::StatusCode::invalid_argument, "the info is null"));
+  segmorph::AnimationDecoder::ModelInfo model;
+  const segmorph_status status = report(decoder, decoder->decoder.model_info(model));
+  if (status == SEGMORPH_STATUS_OK)
+    *info = {model.vertex_count,      model.welded_count,   model.cluster_count, model.frame_count,
+             model.basis_count,       model.coefficient_count, model.max_basis_size, model.max_pairs};
+  return status;
+}
+
+segmorph_status segmorph_decoder_model_welded(segmorph_decoder* decoder, uint32_t* destination, size_t count) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.model_welded(destination, count));
+}
+
+segmorph_status segmorph_decoder_model_weights(segmorph_decoder* decoder, uint32_t* clusters, float* weights,
+                                               size_t count) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.model_weights(clusters, weights, count));
+}
+
+segmorph_status segmorph_decoder_model_clusters(segmorph_decoder* decoder, float* centroids, uint32_t* bases,
+                                                size_t cluster_count) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.model_clusters(centroids, bases, cluster_count));
+}
+
+segmorph_status segmorph_decoder_model_coefficients(segmorph_decoder* decoder, uint32_t* offsets, size_t offset_count,
+                                                    float* coefficients, size_t float_count) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.model_coefficients(offsets, offset_count, coefficients, float_count));
+}
+
+segmorph_status segmorph_decoder_model_motion(segmorph_decoder* decoder, size_t first_frame, size_t frame_count,
+                                              float* destination, size_t destination_floats) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.model_motion(first_frame, frame_count, destination, destination_floats));
+}
+
+segmorph_status segmorph_decoder_model_basis(segmorph_decoder* decoder, size_t first_frame, size_t frame_count,
+                                             float* destination, size_t destination_floats) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.model_basis(first_frame, frame_count, destination, destination_floats));
+}
+
+segmorph_status segmorph_decoder_model_bounds(segmorph_decoder* decoder, float* box) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.model_bounds(box));
+}
+
+segmorph_status segmorph_decoder_model_evaluate(segmorph_decoder* decoder, const float* motion, size_t motion_floats,
+                                                const float* basis, size_t basis_floats, float* positions,
+                                                size_t position_floats) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.evaluate_model(motion, motion_floats, basis, basis_floats, positions,
+                                                         position_floats));
+}
+
 size_t segmorph_decode_tracks_bound(const size_t* time_counts, size_t time_array_count,
                                     const segmorph_track_sampler* samplers, size_t sampler_count) {
   if ((sampler_count > 0 && !samplers) || sampler_count > kMaxSamplers) return 0;

@@ -33,6 +33,13 @@ class FrameLoop {
 
   const Status& status() const { return status_; }
 
+  // What the loop reconstructs from (the playback model, playback_model.h, reads them): the welded base (W × 3), the
+  // dequantized motion and weights, and in version 4 the residuals' coefficients and bases (null in versions 1-3).
+  const std::vector<float>& welded() const { return welded_; }
+  const AffineMotion& motion() const { return motion_; }
+  const ClusterWeights& weights() const { return weights_; }
+  const TransformResiduals* transform() const { return transform_.get(); }
+
   // Starts a clip: its first frame has no reference.
   void start_clip();
 
@@ -83,6 +90,7 @@ class FrameDecoder {
   Status open(const uint8_t* data, size_t size, const std::vector<float>& base, const std::vector<uint32_t>& triangles);
 
   bool is_open() const { return loop_ != nullptr; }
+  const FrameLoop& loop() const { return *loop_; }
   const StreamContent& content() const { return content_; }
   int version() const { return version_; }
 

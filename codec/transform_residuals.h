@@ -47,6 +47,14 @@ class TransformResiduals {
   // products computed once, the same doubles).
   void frame(size_t frame, double* out) const;
 
+  // What frame() reads. Vertex w's scaled coefficients are scaled()[offsets()[w] + a × m + i] (axis a, vector i);
+  // the stream's basis value of vector i in frame f is stream_values()[f × G + i] (G its vectors), cluster k's own
+  // (kBasisOwn) own_values(k)[f × m + i].
+  const std::vector<uint64_t>& offsets() const { return offset_; }
+  const std::vector<double>& scaled() const { return scaled_; }
+  const std::vector<double>& stream_values() const { return stream_; }
+  const std::vector<double>& own_values(size_t cluster) const { return own_[cluster]; }
+
  private:
   const StreamContent& content_;
   std::vector<uint64_t> offset_;  // TransformCoefficients::offset

@@ -119,7 +119,9 @@ function withDecoder(body) {
   const check = (status, what) => {
     if (status !== 0) {
       const message = cString(wasm.segmorph_decoder_message(decoder));
-      throw new Error(`segmorph: ${what ? what + ': ' : ''}${STATUS[status] ?? `status ${status}`}: ${message}`);
+      const error = new Error(`segmorph: ${what ? what + ': ' : ''}${STATUS[status] ?? `status ${status}`}: ${message}`);
+      error.unsupported = status === 4;  // e.g. the model of a version 1-3 stream
+      throw error;
     }
   };
   try {
@@ -195,6 +197,113 @@ function decodeTracks(stream, timeCounts, samplers) {
   });
 }
 
+// The model of a version-4 stream (docs/runtime.md, "Playing the model"; the C API's segmorph_decoder_model_*), for
+// a player that evaluates frames on the GPU: every array in the C API's shapes, in one object. A stream of versions
+// 1 to 3 has none: the Error's `unsupported` is true then (decode frames instead).
+//   { version, vertexCount, weldedCount, clusterCount, frameCount, basisCount, coefficientCount, maxBasisSize,
+//     maxPairs, clipFrames: [frame count per clip], welded (V), clusters (W × 4), weights (W × 4), centroids (K × 3),
+//     bases (K × 2: first value, m), coefficientOffsets (W + 1), coefficients (vectors × 3), motion (F × K × 12),
+//     basis (F × N), bounds (6: min x y z, max x y z) }
+const MODEL_INFO_FIELDS = ['vertexCount', 'weldedCount', 'clusterCount', 'frameCount', 'basisCount', 'coefficientCount',
+                           'maxBasisSize', 'maxPairs'];
+
+function readModel(decoder, check, pointers) {
+  const infoPointer = allocate(MODEL_INFO_FIELDS.length * 4);
+  pointers.push(infoPointer);
+  check(wasm.segmorph_decoder_model_info(decoder, infoPointer), 'model');
+  const fields = new Uint32Array(wasm.memory.buffer, infoPointer, MODEL_INFO_FIELDS.length).slice();
+  const model = { version: wasm.segmorph_decoder_stream_version(decoder) };
+  MODEL_INFO_FIELDS.forEach((name, i) => { model[name] = fields[i]; });
+  model.clipFrames = [];
+  for (let c = 0, count = wasm.segmorph_decoder_clip_count(decoder); c < count; ++c)
+    model.clipFrames.push(wasm.segmorph_decoder_frame_count(decoder, c));
+  const { vertexCount: V, weldedCount: W, clusterCount: K, frameCount: F, basisCount: N, coefficientCount: C } = model;
+  const out = (count, Type) => {
+    const pointer = allocate(count * 4);
+    pointers.push(pointer);
+    return { pointer, take: () => new Type(wasm.memory.buffer, pointer, count).slice() };
+  };
+  const welded = out(V, Uint32Array);
+  check(wasm.segmorph_decoder_model_welded(decoder, welded.pointer, V), 'model');
+  const clusters = out(W * 4, Uint32Array), weights = out(W * 4, Float32Array);
+  check(wasm.segmorph_decoder_model_weights(decoder, clusters.pointer, weights.pointer, W * 4), 'model');
+  const centroids = out(K * 3, Float32Array), bases = out(K * 2, Uint32Array);
+  check(wasm.segmorph_decoder_model_clusters(decoder, centroids.pointer, bases.pointer, K), 'model');
+  const offsets = out(W + 1, Uint32Array), coefficients = out(C * 3, Float32Array);
+  check(wasm.segmorph_decoder_model_coefficients(decoder, offsets.pointer, W + 1, coefficients.pointer, C * 3), 'model');
+  const motion = out(F * K * 12, Float32Array), basis = out(F * N, Float32Array), bounds = out(6, Float32Array);
+  check(wasm.segmorph_decoder_model_motion(decoder, 0, F, motion.pointer, F * K * 12), 'model');
+  check(wasm.segmorph_decoder_model_basis(decoder, 0, F, basis.pointer, F * N), 'model');
+  check(wasm.segmorph_decoder_model_bounds(decoder, bounds.pointer), 'model');
+  Object.assign(model, {
+    welded: welded.take(), clusters: clusters.take(), weights: weights.take(), centroids: centroids.take(),
+    bases: bases.take(), coefficientOffsets: offsets.take(), coefficients: coefficients.take(), motion: motion.take(),
+    basis: basis.take(), bounds: bounds.take(),
+  });
+  return model;
+}
+
+function decodeModel(stream, positions, indices) {
+  return withDecoder((decoder, check, pointers) => {
+    open(decoder, check, pointers, stream, positions, indices);
+    return readModel(decoder, check, pointers);
+  });
+}
+
+// The model and the float32 reference of its evaluation (the vertex shader's arithmetic, docs/runtime.md), for tests
+// and for a player without a shader path: evaluate(motion, basis, out?) gives the V × 3 positions at one set of
+// parameters (K × 12 and N floats: a frame's, or a blend). dispose() frees it.
+class ModelDecoder {
+  constructor(stream, positions, indices) {
+    requireReady();
+    this._decoder = wasm.segmorph_decoder_create();
+    if (this._decoder === 0) throw new Error('segmorph: out of memory');
+    const pointers = [];
+    try {
+      const check = (status, what) => this._check(status, what);
+      open(this._decoder, check, pointers, stream, positions, indices);
+      this.model = readModel(this._decoder, check, pointers);
+      const { clusterCount: K, basisCount: N, vertexCount: V } = this.model;
+      this._parameters = allocate((K * 12 + N) * 4);
+      this._positions = allocate(V * 12);
+    } catch (error) {
+      this.dispose();
+      throw error;
+    } finally {
+      for (const pointer of pointers) wasm.segmorph_wasm_free(pointer);
+    }
+  }
+
+  _check(status, what) {
+    if (status !== 0) {
+      const error = new Error(`segmorph: ${what}: ${STATUS[status] ?? status}: ${cString(wasm.segmorph_decoder_message(this._decoder))}`);
+      error.unsupported = status === 4;
+      throw error;
+    }
+  }
+
+  evaluate(motion, basis, target) {
+    const { clusterCount: K, basisCount: N, vertexCount: V } = this.model;
+    if (motion.length < K * 12 || basis.length < N) throw new RangeError(`segmorph: the parameters need ${K * 12} and ${N} floats`);
+    const parameters = new Float32Array(wasm.memory.buffer, this._parameters, K * 12 + N);
+    parameters.set(motion.subarray(0, K * 12));
+    parameters.set(basis.subarray(0, N), K * 12);
+    this._check(wasm.segmorph_decoder_model_evaluate(this._decoder, this._parameters, K * 12, this._parameters + K * 48, N,
+                                                      this._positions, V * 3), 'evaluate');
+    const out = target ?? new Float32Array(V * 3);
+    out.set(new Float32Array(wasm.memory.buffer, this._positions, V * 3));
+    return out;
+  }
+
+  dispose() {
+    if (this._decoder === 0) return;
+    if (this._parameters) wasm.segmorph_wasm_free(this._parameters);
+    if (this._positions) wasm.segmorph_wasm_free(this._positions);
+    wasm.segmorph_decoder_destroy(this._decoder);
+    this._decoder = 0;
+  }
+}
+
 // Frame by frame: a decoder that holds the stream and one frame (vertex count × 3 floats) in the module's memory and
 // decodes the next frame on demand, for a player that must not hold every frame. dispose() frees it.
 class StreamDecoder {
@@ -265,7 +374,7 @@ function useWorkers(count) {
       worker.pending -= 1;
       const request = pending.get(data.id);
       pending.delete(data.id);
-      if (data.error) request.reject(new Error(data.error));
+      if (data.error) request.reject(Object.assign(new Error(data.error), { unsupported: data.unsupported === true }));
       else request.resolve(data.result);
     };
     worker.onerror = (event) => {
@@ -293,14 +402,17 @@ const api = {
   decodeStream,
   decodeTargets,
   decodeTracks,
+  decodeModel,
+  createModelDecoder: (stream, positions, indices) => new ModelDecoder(stream, positions, indices),
   createStreamDecoder: (stream, positions, indices) => new StreamDecoder(stream, positions, indices),
   useWorkers,
   decodeStreamAsync: (...args) => inWorker('decodeStream', args),
   decodeTargetsAsync: (...args) => inWorker('decodeTargets', args),
   decodeTracksAsync: (...args) => inWorker('decodeTracks', args),
+  decodeModelAsync: (...args) => inWorker('decodeModel', args),
   // The library's version (major × 1000 + minor × 10 + patch), once ready.
   get version() { requireReady(); return wasm.segmorph_version(); },
 };
 
 export const SegmorphDecoder = api;
-export { StreamDecoder };
+export { ModelDecoder, StreamDecoder };

@@ -15,6 +15,6 @@ self.onmessage = async ({ data }) => {
     const result = SegmorphDecoder[data.method](...data.args);
     self.postMessage({ id: data.id, result }, transferables(result));
   } catch (error) {
-    self.postMessage({ id: data.id, error: error.message });
+    self.postMessage({ id: data.id, error: error.message, unsupported: error.unsupported === true });
   }
 };

@@ -92,7 +92,57 @@ class SEGMORPH_API AnimationDecoder {
   // Positions the decoder at the first frame of `clip` (invalid_argument when there is no such clip).
   Status seek(size_t clip);
 
+  // The model of a version-4 stream (spec/bitstream.md 8.5 and 8.7.1), for a player that evaluates frames itself,
+  // on a GPU or a CPU, instead of decoding them (docs/runtime.md, "Playing the model"). Frame f of the stream, at
+  // vertex v of welded vertex w, is
+  //   X = Σ_j ω_j (A_kj(f) (x_v − c_kj) + t_kj(f)) + Σ_i q_w,i b_(first_k + i)(f)
+  // over w's pairs (k_j, ω_j) (its own cluster k first) and the m_k vectors of its own cluster's basis: the same
+  // per-vertex data for every frame, and positions linear in the per-frame parameters A, t and b, so a blend of
+  // frames is the model at the blended parameters. Every array is float32 (or uint32), in the shapes below, each
+  // filled by one call into a buffer the caller sized from model_info(). In float32 the model's positions differ from
+  // the decoded (double-evaluated) frames by rounding only (docs/runtime.md gives the measured difference).
+  // Streams of versions 1 to 3 have no such model (each frame depends on earlier frames' residuals): every model_*
+  // call returns unsupported for them, and a player decodes frames instead.
+  struct ModelInfo {
+    size_t vertex_count = 0;       // V
+    size_t welded_count = 0;       // W
+    size_t cluster_count = 0;      // K
+    size_t frame_count = 0;        // F: every clip's frames, end to end (clip c starts at the sum of those before)
+    size_t basis_count = 0;        // N: the basis values of a frame
+    size_t coefficient_count = 0;  // coefficient vectors, 3 floats each (x, y, z)
+    size_t max_basis_size = 0;     // the largest m_k
+    size_t max_pairs = 0;          // the most clusters a welded vertex blends (1 to 4)
+  };
+  Status model_info(ModelInfo& info);
+  // V: the welded vertex of each vertex.
+  Status model_welded(uint32_t* destination, size_t count);
+  // W × 4 each: per welded vertex its pairs, the own cluster first, then the extra clusters in stream order; unused
+  // pairs are (own cluster, weight 0).
+  Status model_weights(uint32_t* clusters, float* weights, size_t count);
+  // K × 3 centroids (c_k) and K × 2 bases: the index of cluster k's first value in a frame's basis values, and m_k
+  // (0: no residuals).
+  Status model_clusters(float* centroids, uint32_t* bases, size_t cluster_count);
+  // W + 1 offsets (in vectors) and coefficient_count × 3 floats: vector i of welded vertex w at (offsets[w] + i) × 3
+  // (x, y, z), i < m of its own cluster; each q × D of spec 8.7.1 rounded to float.
+  Status model_coefficients(uint32_t* offsets, size_t offset_count, float* coefficients, size_t float_count);
+  // Frames first_frame .. first_frame + frame_count − 1 of the stream: per frame K × 12 floats, cluster k's 3 × 4
+  // [A | t] row by row at k × 12 (A r0, A r1, A r2, t r for row r) ...
+  Status model_motion(size_t first_frame, size_t frame_count, float* destination, size_t destination_floats);
+  // ... and N floats, the basis values b_n(f).
+  Status model_basis(size_t first_frame, size_t frame_count, float* destination, size_t destination_floats);
+  // A box holding every vertex of every frame (min x, y, z, then max x, y, z), from the model, without decoding
+  // frames: conservative (each cluster's map applied to the box of its vertices, the largest residual), never
+  // smaller than the frames' box.
+  Status model_bounds(float box[6]);
+  // The model's V × 3 positions at one set of parameters (motion: K × 12 floats, basis: N floats, as model_motion()
+  // and model_basis() give them for a frame, or a blend of frames'): the float32 reference of the vertex shader in
+  // docs/runtime.md, operation by operation.
+  Status evaluate_model(const float* motion, size_t motion_floats, const float* basis, size_t basis_floats,
+                        float* positions, size_t position_floats);
+
  private:
+  Status make_model();  // the model of the open stream, made on first use (unsupported before version 4)
+
   struct State;
   std::unique_ptr<State> state_;
 };

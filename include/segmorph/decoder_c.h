@@ -113,6 +113,57 @@ SEGMORPH_API segmorph_status segmorph_decode_frame(segmorph_decoder* decoder, fl
  * keeps a checkpoint of about 3 bytes per vertex at each), else the cost of decoding the frames before it. */
 SEGMORPH_API segmorph_status segmorph_decoder_seek(segmorph_decoder* decoder, size_t clip);
 
+/* The model of a version-4 stream, for a player that evaluates frames itself, on a GPU or a CPU, instead of decoding
+ * them (docs/runtime.md, "Playing the model"; the same as the C++ API's AnimationDecoder::model_*, whose comments
+ * give the formula). Frame f at vertex v of welded vertex w is
+ *   X = sum_j w_j (A_kj(f) (x_v - c_kj) + t_kj(f)) + sum_i q_w,i b_(first_k + i)(f)
+ * over w's (cluster, weight) pairs, its own cluster k first, and the m_k vectors of k's basis. Positions are linear in
+ * the per-frame parameters A, t and b: a blend of frames is the model at the blended parameters. Every array is
+ * float32 or uint32 in the shapes below, sized from segmorph_decoder_model_info(). Versions 1 to 3 have no model:
+ * every segmorph_decoder_model_* call returns UNSUPPORTED, and a player decodes frames instead. */
+typedef struct segmorph_model_info {
+  size_t vertex_count;      /* V */
+  size_t welded_count;      /* W */
+  size_t cluster_count;     /* K */
+  size_t frame_count;       /* F: every clip's frames, end to end */
+  size_t basis_count;       /* N: the basis values of a frame */
+  size_t coefficient_count; /* coefficient vectors, 3 floats each */
+  size_t max_basis_size;    /* the largest m_k */
+  size_t max_pairs;         /* the most clusters a welded vertex blends (1 to 4) */
+} segmorph_model_info;
+
+SEGMORPH_API segmorph_status segmorph_decoder_model_info(segmorph_decoder* decoder, segmorph_model_info* info);
+/* V: the welded vertex of each vertex. */
+SEGMORPH_API segmorph_status segmorph_decoder_model_welded(segmorph_decoder* decoder, uint32_t* destination,
+                                                           size_t count);
+/* W x 4 each: per welded vertex its pairs, the own cluster first; unused pairs are (own cluster, weight 0). */
+SEGMORPH_API segmorph_status segmorph_decoder_model_weights(segmorph_decoder* decoder, uint32_t* clusters,
+                                                            float* weights, size_t count);
+/* K x 3 centroids, and K x 2: the index of cluster k's first value in a frame's basis values, and m_k (0: none). */
+SEGMORPH_API segmorph_status segmorph_decoder_model_clusters(segmorph_decoder* decoder, float* centroids,
+                                                             uint32_t* bases, size_t cluster_count);
+/* W + 1 offsets (in vectors) and coefficient_count x 3 floats: vector i of welded vertex w at (offsets[w] + i) x 3. */
+SEGMORPH_API segmorph_status segmorph_decoder_model_coefficients(segmorph_decoder* decoder, uint32_t* offsets,
+                                                                 size_t offset_count, float* coefficients,
+                                                                 size_t float_count);
+/* Frames first_frame .. first_frame + frame_count - 1: K x 12 floats each (cluster k's [A | t] row by row at k x 12:
+ * A r0, A r1, A r2, t r for row r) ... */
+SEGMORPH_API segmorph_status segmorph_decoder_model_motion(segmorph_decoder* decoder, size_t first_frame,
+                                                           size_t frame_count, float* destination,
+                                                           size_t destination_floats);
+/* ... and N floats each, the basis values. */
+SEGMORPH_API segmorph_status segmorph_decoder_model_basis(segmorph_decoder* decoder, size_t first_frame,
+                                                          size_t frame_count, float* destination,
+                                                          size_t destination_floats);
+/* A box (min x, y, z, max x, y, z) holding every vertex of every frame, from the model, without decoding frames. */
+SEGMORPH_API segmorph_status segmorph_decoder_model_bounds(segmorph_decoder* decoder, float* box);
+/* The model's V x 3 positions at one set of parameters (K x 12 motion floats, N basis values: a frame's or a blend):
+ * the float32 reference of the vertex shader in docs/runtime.md. */
+SEGMORPH_API segmorph_status segmorph_decoder_model_evaluate(segmorph_decoder* decoder, const float* motion,
+                                                             size_t motion_floats, const float* basis,
+                                                             size_t basis_floats, float* positions,
+                                                             size_t position_floats);
+
 /* Track streams (spec/tracks.md): an animation's coded keyframe samplers. The glTF JSON gives the layout
  * (spec/README.md, "Coded tracks"): each distinct time array's key count, and per coded sampler its time array, path
  * (0 translation, 1 rotation, 2 scale, 3 weights) and component count (3, 4 for rotations, the target count for

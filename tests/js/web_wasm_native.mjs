@@ -3,7 +3,9 @@
 // JavaScript decoder, draco3dgltf, each compressed primitive's stream with SegmorphDecoder) and the frames must equal
 // `segmorph decode FILE --frames` bit for bit (the same layout: primitives in mesh order, clips, frames; kept targets
 // as displacements). Coded track streams are compared with the decoded file's float tracks, bit for bit (but for
-// samplers only placeholder channels play, which decode drops).
+// samplers only placeholder channels play, which decode drops). The model of each version-4 clip primitive
+// (SegmorphDecoder.createModelDecoder, the float32 arithmetic of GPU playback) must give every frame within 1e-5 of
+// the base mesh's diagonal of the decoded one, and a primitive of versions 1-3 must say it has no model.
 //
 //   node tests/js/web_wasm_native.mjs SEGMORPH WEB_DIR WORK_DIR FILE...
 // Exit status 1 on any difference or failure, with one line saying where.
@@ -54,7 +56,38 @@ function dracoBase(asset, extension) {
   return { positions, indices };
 }
 
-let failures = 0, compared = 0, floats = 0;
+// The largest float32 model evaluation difference from the decoded frames, over every frame, relative to the diagonal.
+function modelDifference(stream, positions, indices, clips) {
+  let decoder;
+  try {
+    decoder = SegmorphDecoder.createModelDecoder(stream, positions, indices);
+  } catch (error) {
+    if (error.unsupported) return null;
+    throw error;
+  }
+  try {
+    const { model } = decoder, K = model.clusterCount, N = model.basisCount, V = model.vertexCount;
+    let low = [Infinity, Infinity, Infinity], high = [-Infinity, -Infinity, -Infinity];
+    for (let i = 0; i < positions.length; ++i) low[i % 3] = Math.min(low[i % 3], positions[i]), high[i % 3] = Math.max(high[i % 3], positions[i]);
+    const diagonal = Math.hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]) || 1;
+    let frame = 0, largest = 0;
+    const out = new Float32Array(V * 3);
+    for (const clip of clips)
+      for (let f = 0; f < clip.frameCount; ++f, ++frame) {
+        decoder.evaluate(model.motion.subarray(frame * K * 12, (frame + 1) * K * 12), model.basis.subarray(frame * N, (frame + 1) * N), out);
+        const expected = clip.frames.subarray(f * V * 3, (f + 1) * V * 3);
+        for (let i = 0; i < out.length; ++i) largest = Math.max(largest, Math.abs(out[i] - expected[i]));
+        const b = model.bounds;
+        for (let i = 0; i < out.length; ++i)
+          if (out[i] < b[i % 3] || out[i] > b[3 + i % 3]) throw new Error(`frame ${frame} leaves the model's bounds`);
+      }
+    return largest / diagonal;
+  } finally {
+    decoder.dispose();
+  }
+}
+
+let failures = 0, compared = 0, floats = 0, models = 0, modelLargest = 0;
 for (const file of files) {
   const name = path.basename(file);
   try {
@@ -69,7 +102,16 @@ for (const file of files) {
         if (extension.morphTargets) {
           parts.push(SegmorphDecoder.decodeTargets(stream, positions, indices).deltas);
         } else {
-          for (const clip of SegmorphDecoder.decodeStream(stream, positions, indices).clips) parts.push(clip.frames);
+          const decodedStream = SegmorphDecoder.decodeStream(stream, positions, indices);
+          for (const clip of decodedStream.clips) parts.push(clip.frames);
+          const difference = modelDifference(stream, positions, indices, decodedStream.clips);
+          if ((difference === null) !== (decodedStream.version < 4))
+            throw new Error(`mesh ${m} primitive ${p}: a version-${decodedStream.version} stream ${difference === null ? 'has no' : 'has a'} model`);
+          if (difference !== null) {
+            models += 1;
+            modelLargest = Math.max(modelLargest, difference);
+            if (!(difference <= 1e-5)) throw new Error(`mesh ${m} primitive ${p}: the float32 model is ${difference.toExponential(2)} of the diagonal from the decoded frames`);
+          }
         }
       }
     const reference = path.join(work, `${name}.frames.bin`), decodedFile = path.join(work, `${name}.decoded.glb`);
@@ -118,5 +160,5 @@ for (const file of files) {
     failures += 1;
   }
 }
-console.log(`web_wasm_native: ${compared} of ${files.length} files, ${floats} floats: ${failures === 0 ? 'the WebAssembly decoder gives the native floats bit for bit' : `${failures} failed`}`);
+console.log(`web_wasm_native: ${compared} of ${files.length} files, ${floats} floats: ${failures === 0 ? 'the WebAssembly decoder gives the native floats bit for bit' : `${failures} failed`}; ${models} version-4 models in float32 within ${modelLargest.toExponential(2)} of the diagonal`);
 process.exit(failures === 0 ? 0 : 1);
