@@ -51,6 +51,12 @@ struct CodecSettings {
   // that takes fewer bytes than the residual loop at no more KG error. Error targets (RateMode::error) only, and not
   // with table_residuals.
   bool transform_residuals = true;
+  // Only a version-4 stream, whose model a GPU evaluates (docs/runtime.md, "Playing the model"): the transform-coded
+  // stream is kept even where the residual loop's would be smaller; it is made at the residual loop's error as
+  // without the setting (the same stream where that one is version 4), else at the error target; an encode that
+  // cannot write one fails (UNSUPPORTED) rather than fall back.
+  // Needs transform_residuals, an error target and no table_residuals.
+  bool gpu_playable = false;
   // With transform_residuals: at most this many rows (a welded vertex's axis over all frames) of each cluster, and of
   // the whole stream, inform the bases and the choice among them (evenly spaced, each standing for the rows between);
   // the coefficients of every row are fitted, and the error is the decoder's, whatever the number. It bounds the

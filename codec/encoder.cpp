@@ -160,15 +160,37 @@ std::vector<FrameSequence> shaped_like(const std::vector<FrameSequence>& clips) 
 }
 
 // Version 4: the residual loop's stream replaced by the transform section's where that is smaller at no more squared
-// error (transform_coding.h). Takes the content over.
+// error (transform_coding.h), or with gpu_playable always (failing where there is none). Takes the content over.
 Status try_transform(const EncodeProblem& problem, StreamContent&& content, std::vector<uint8_t>& stream,
                      std::vector<FrameSequence>& restored, StreamReport& report) {
   const auto start = EncodeClock::now();
   report_progress(problem.settings, "transform residuals");
   std::vector<uint8_t> candidate;
   StreamSizes sizes;
-  if (transform_content(problem, std::move(content), squared_error(problem.clips, restored), candidate, sizes) &&
-      candidate.size() < stream.size()) {
+  const bool required = problem.settings.gpu_playable;
+  const double budget = squared_error(problem.clips, restored);
+  bool made;
+  if (!required) {
+    made = transform_content(problem, std::move(content), budget, candidate, sizes);
+  } else {
+    // transform_content drops the residual symbols (as large as the frames): without them, copies are small.
+    content.residuals = std::vector<int64_t>();
+    content.narrow_residuals = std::vector<int32_t>();
+    // First as without the setting (a primitive that gets version 4 anyway gets the same stream); else at the error
+    // target (the residual loop may have come closer to the frames, or to zero error), then tighter: a stream of
+    // almost no residuals can be shorter than the format allows for its vertex frames (kMaxVertexFramesPerByte).
+    made = transform_content(problem, content, budget, candidate, sizes);
+    const double target = frame_spread(problem.clips) * std::pow(problem.settings.target / 100.0, 2);
+    for (int tighter = 0; !made && tighter < 5; ++tighter)
+      made = transform_content(problem, content, std::max(budget, target) * std::pow(1.0 / 16, tighter), candidate,
+                               sizes);
+  }
+  if (required && !made)
+    return Status(StatusCode::unsupported,
+                  "no GPU-playable (version-4) stream reaches the error target within the format's limits (2048 "
+                  "frames, its bases' entries and coefficients); without the GPU-playable setting this primitive "
+                  "gets stream version 3");
+  if (made && (required || candidate.size() < stream.size())) {
     // Its frames replace the residual loop's: the decoder's, decoded once the others are gone.
     std::vector<std::vector<float>> times(restored.size());
     for (size_t c = 0; c < restored.size(); ++c) times[c] = std::move(restored[c].times);
@@ -202,6 +224,10 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   SEGMORPH_RETURN_IF_ERROR(check_input(clips, base));
   if (settings.mode != RateMode::lossless && !(settings.target > 0))
     return Status(StatusCode::invalid_argument, "the rate target must be positive");
+  if (settings.gpu_playable &&
+      (!settings.transform_residuals || settings.mode != RateMode::error || settings.table_residuals))
+    return Status(StatusCode::invalid_argument,
+                  "a GPU-playable stream (version 4) needs an error target, transform residuals and no table code");
   if (settings.transform_sample_rows < 3)
     return Status(StatusCode::invalid_argument, "transform_sample_rows must be at least 3 (one vertex)");
   StreamReport report;

@@ -23,7 +23,7 @@ const char* const kCommands =
     "      Skins and joint channels that no longer move anything are removed; everything else is kept.\n"
     "  encode IN -o OUT [--cache C] [--error E | --bpvf R | --lossless] [--fps N] [--clusters K]\n"
     "         [--position-bits B] [--normal-bits B] [--texcoord-bits B] [--skins keep|bake]\n"
-    "         [--targets auto|keep|bake] [--fast-decode] [--max-stream-version N] [--json]\n"
+    "         [--targets auto|keep|bake] [--fast-decode] [--max-stream-version N] [--gpu-playable] [--json]\n"
     "      Compress every animated primitive: its first frame with KHR_draco_mesh_compression, its animation\n"
     "      as a SEGMORPH_animation_compression stream: the sampled frames, or the morph targets themselves\n"
     "      (see --targets); a skinned mesh keeps its skin (see --skins). Meshes that animated nodes move\n"
@@ -154,6 +154,13 @@ const Option kOptions[] = {
      "temporal bases and coefficients (with --error targets, not with --fast-decode), which the encoder uses only "
      "where they make a stream smaller; --fast-decode needs 2",
      [](CommandLine& line, const std::string&, double number) { line.encode.max_stream_version = int(number); }},
+    {"--gpu-playable", nullptr, nullptr, kEncode, Kind::flag, 0, 0, false, nullptr, 0,
+     "write every stream of clips as version 4, whose model players evaluate on the GPU (the three.js plugin's "
+     "default playback, docs/runtime.md), even where version 3 would be smaller (docs/codec.md: the cost); a "
+     "primitive that cannot have one at the error target fails the encode; kept morph targets are coded as without "
+     "it (they play as morph targets). With --error targets only: not with --bpvf, --lossless, --fast-decode or "
+     "--max-stream-version below 4",
+     [](CommandLine& line, const std::string&, double) { line.encode.gpu_playable = true; }},
     {"--clusters", nullptr, "K", kEncode, Kind::whole, 1, 65535, false, nullptr, 0,
      "number of motion clusters, {range}, at most what the segmentation gives a primitive (more is said and coded "
      "with that many; default: automatic)",
@@ -301,6 +308,17 @@ bool check_encode_options(const CommandLine& line, std::string& error) {
     return error = "--fast-decode codes lossy residuals: it cannot be combined with --lossless", false;
   if (line.encode.fast_decode && line.encode.max_stream_version < 2)
     return error = "--fast-decode writes stream version 2: it cannot be combined with --max-stream-version 1", false;
+  if (line.encode.gpu_playable) {
+    if (line.encode.mode == RateMode::lossless)
+      return error = "--gpu-playable writes lossy version-4 streams: it cannot be combined with --lossless", false;
+    if (line.encode.mode == RateMode::bpvf)
+      return error = "--gpu-playable needs an --error target: it cannot be combined with --bpvf", false;
+    if (line.encode.fast_decode)
+      return error = "--gpu-playable writes version 4, --fast-decode version 2: they cannot be combined", false;
+    if (line.encode.max_stream_version < 4)
+      return error = "--gpu-playable writes stream version 4: it cannot be combined with --max-stream-version " +
+                     std::to_string(line.encode.max_stream_version), false;
+  }
   return true;
 }
 

@@ -231,6 +231,10 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
       if (stream.mesh == primitive.output_mesh && stream.primitive == primitive.output_primitive)
         primitive.clusters = stream.clusters;
     primitive.bytes = coded_bytes(encoded.model, primitive.output_mesh, primitive.output_primitive);
+    bool kept_targets = false;
+    primitive.stream_version =
+        compressed_stream_version(encoded.model, primitive.output_mesh, primitive.output_primitive, kept_targets);
+    primitive.gpu_playable = primitive.stream_version == 4 && !kept_targets;
     primitive.error = primitive_error(file.model, compared);
     report.primitives.push_back(primitive);
   }
@@ -270,8 +274,13 @@ Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinyglt
     return Status(StatusCode::invalid_argument, "the stream version must be 1 to 4");
   if (settings.fast_decode && settings.max_stream_version < 2)
     return Status(StatusCode::invalid_argument, "fast decoding writes stream version 2");
+  if (settings.gpu_playable &&
+      (settings.mode != RateMode::error || settings.fast_decode || settings.max_stream_version < 4))
+    return Status(StatusCode::invalid_argument,
+                  "GPU-playable streams (version 4) need an error target, no fast decoding and stream version 4");
   EncodeChoices choices;
   choices.codec.mode = settings.mode;
+  choices.codec.gpu_playable = settings.gpu_playable;
   choices.codec.target = settings.target;
   choices.codec.clusters = settings.clusters;
   choices.codec.table_residuals = settings.fast_decode;

@@ -81,6 +81,9 @@ Status compress_targets_node(tinygltf::Model& model, const SampledNode& node, co
     const std::vector<FrameSequence> reordered = in_decoded_order(sampled.clips, encoding);
 
     CodecSettings target_settings = settings;
+    // Kept targets play as morph targets (their count is the file's, not the frames'), whatever their stream's
+    // version: a GPU-playable setting would only make their stream larger.
+    target_settings.gpu_playable = false;
     target_settings.outside_bytes += encoding.draco_bytes.size();
     target_settings.progress = codec_progress(progress, what);
     if (settings.mode == RateMode::bpvf) {

@@ -193,7 +193,9 @@ std::string encoded_primitives_json(const EncodeReport& report) {
     json += std::string(",\"mode\":\"") + mode_name(primitive.mode) + "\",\"output_mesh\":" +
             std::to_string(primitive.output_mesh) + ",\"output_primitive\":" +
             std::to_string(primitive.output_primitive) + ",\"clusters\":" + std::to_string(primitive.clusters) +
-            ",\"bytes\":" + std::to_string(primitive.bytes) + "}";
+            ",\"bytes\":" + std::to_string(primitive.bytes) + ",\"stream_version\":" +
+            (primitive.stream_version ? std::to_string(primitive.stream_version) : "null") +
+            ",\"gpu_playable\":" + (primitive.gpu_playable ? "true" : "false") + "}";
   }
   return json + "]";
 }
@@ -204,13 +206,25 @@ std::string encoded_primitives_text(const EncodeReport& report) {
   for (const EncodedPrimitive& primitive : report.primitives) {
     char line[512];
     const PrimitiveError& e = primitive.error;
-    std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu frames, %zu clusters, %zu bytes, KG %.4f %%%s\n",
+    const std::string version = primitive.stream_version == 0 ? std::string()
+                                : ", stream version " + std::to_string(primitive.stream_version) +
+                                      (primitive.gpu_playable ? " (GPU-playable)" : "");
+    std::snprintf(line, sizeof(line), "  %s: %s, %zu vertices, %zu frames, %zu clusters, %zu bytes, KG %.4f %%%s%s\n",
                   primitive_label(e).c_str(), mode_name(primitive.mode), e.vertices, e.frames, primitive.clusters,
-                  primitive.bytes, e.kg_percent,
+                  primitive.bytes, e.kg_percent, version.c_str(),
                   primitive.mode == PrimitiveMode::rigid ? " of the part alone (not in the file's KG)" : "");
     text += line;
   }
   return text;
+}
+
+// How info says an encoded primitive's stream plays.
+std::string stream_text(const PrimitiveInfo& primitive) {
+  if (primitive.stream_version == 0) return "";
+  const std::string version = ", stream version " + std::to_string(primitive.stream_version);
+  if (primitive.kept_targets) return version + " of kept morph targets (plays as morph targets)";
+  return version + (primitive.gpu_playable ? " (plays on the GPU from its model)"
+                                           : " (plays as decoded frames; --gpu-playable writes version 4)");
 }
 
 int run_info(const CommandLine& options) {
@@ -233,12 +247,14 @@ int run_info(const CommandLine& options) {
             ",\"kind\":" + json_string(primitive.kind) + ",\"vertices\":" + std::to_string(primitive.vertices) +
             ",\"triangles\":" + std::to_string(primitive.triangles) +
             ",\"welded_vertices\":" + std::to_string(primitive.welded_vertices) +
-            ",\"connected_components\":" + std::to_string(primitive.connected_components) + ",\"clips\":[";
+            ",\"connected_components\":" + std::to_string(primitive.connected_components) +
+            ",\"stream_version\":" + (primitive.stream_version ? std::to_string(primitive.stream_version) : "null") +
+            ",\"gpu_playable\":" + (primitive.gpu_playable ? "true" : "false") + ",\"clips\":[";
     text += name + ", mesh " + std::to_string(primitive.mesh) + " primitive " + std::to_string(primitive.primitive) +
             ": " + primitive.kind + ", " + std::to_string(primitive.vertices) + " vertices (" +
             std::to_string(primitive.welded_vertices) + " welded), " + std::to_string(primitive.triangles) +
             " triangles, " + std::to_string(primitive.connected_components) + " connected component" +
-            (primitive.connected_components == 1 ? "" : "s") + "\n";
+            (primitive.connected_components == 1 ? "" : "s") + stream_text(primitive) + "\n";
     for (size_t c = 0; c < primitive.clips.size(); ++c) {
       const ClipInfo& clip = primitive.clips[c];
       char line[512];

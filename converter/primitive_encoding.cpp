@@ -109,8 +109,9 @@ Status encode_stream(const std::vector<FrameSequence>& reordered, const CodecSet
                      const std::string& what, PrimitiveEncoding& encoding) {
   const BaseMesh& decoded = encoding.decoded;
   encoding.report = StreamReport();
-  SEGMORPH_RETURN_IF_ERROR(encode_animation(reordered, decoded.attributes[0].values, settings, encoding.stream,
-                                            &encoding.report, &encoding.reconstruction));
+  const Status encoded = encode_animation(reordered, decoded.attributes[0].values, settings, encoding.stream,
+                                          &encoding.report, &encoding.reconstruction);
+  if (!encoded.ok()) return Status(encoded.code(), what + ": " + encoded.message());
   if (settings.progress) settings.progress("checking that the stream decodes to the encoder's frames", -1);
   std::vector<FrameSequence> check;
   const Status check_status = decode_animation(encoding.stream.data(), encoding.stream.size(),

@@ -735,6 +735,51 @@ TEST(Cli, FastDecodeIsDocumentedAndNotLossless) {
   }
 }
 
+// --gpu-playable: the baked flag, whose default stream is version 3 (version 4 is larger there), gets version 4 at
+// no more than the error target; encode's and info's --json say it plays on the GPU, and decode and verify read it.
+TEST(Cli, GpuPlayableWritesVersionFourWhereTheDefaultDoesNot) {
+  const std::string directory = output_directory("gpu_playable");
+  const std::string input = sample("WavingFlag/flag.glb"), plain = directory + "/plain.glb",
+                    playable = directory + "/playable.glb";
+  const std::string version_3("SGMA\x03", 5), version_4("SGMA\x04", 5);
+  Result result = run("encode -q " + input + " -o " + plain + " --targets bake --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("\"stream_version\":3,\"gpu_playable\":false"), std::string::npos) << result.out;
+  result = run("encode -q " + input + " -o " + playable + " --targets bake --gpu-playable --json");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("\"stream_version\":4,\"gpu_playable\":true"), std::string::npos) << result.out;
+  EXPECT_LE(json_number(result.out, "kg_percent"), 0.15);
+  EXPECT_NE(read_text(plain).find(version_3), std::string::npos);
+  EXPECT_NE(read_text(playable).find(version_4), std::string::npos);
+  for (const auto& [file, playable_on_gpu] : {std::pair{plain, false}, std::pair{playable, true}}) {
+    result = run("info -q " + file + " --json");
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_NE(result.out.find(playable_on_gpu ? "\"gpu_playable\":true" : "\"gpu_playable\":false"),
+              std::string::npos) << result.out;
+    result = run("info -q " + file);
+    EXPECT_NE(result.out.find(playable_on_gpu ? "plays on the GPU from its model" : "plays as decoded frames"),
+              std::string::npos) << result.out;
+  }
+  result = run("verify -q " + input + " " + playable + " --max-error 0.15");
+  EXPECT_EQ(result.exit_code, 0) << result.out << result.err;
+}
+
+// --gpu-playable is documented, and refused with what cannot write version 4: a usage error in one line, nothing
+// written.
+TEST(Cli, GpuPlayableIsDocumentedAndRefusesWhatCannotWriteVersionFour) {
+  const Result help = run("--help");
+  EXPECT_NE(help.out.find("--gpu-playable"), std::string::npos);
+  const std::string directory = output_directory("gpu_playable_refused");
+  for (const char* options : {"--gpu-playable --lossless", "--bpvf 4 --gpu-playable", "--gpu-playable --fast-decode",
+                              "--gpu-playable --max-stream-version 3"}) {
+    const Result result = run("encode -q " + sample("WavingFlag/flag.glb") + " -o " + directory + "/x.glb " + options);
+    EXPECT_EQ(result.exit_code, 2) << options;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_NE(result.err.find("--gpu-playable"), std::string::npos) << result.err;
+    EXPECT_TRUE(fs::is_empty(directory)) << options;
+  }
+}
+
 // --targets keep: the morph targets stay, filled in from the stream by decode; the weights animation stays.
 TEST(Cli, KeptMorphTargetsEncodeDecodeAndVerify) {
   const std::string directory = output_directory("kept_targets");

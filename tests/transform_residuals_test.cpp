@@ -155,6 +155,46 @@ TEST(TransformResiduals, OnlyWithTheSettingAndAnErrorTarget) {
     EXPECT_LE(encode(clips, base, settings).stream[4], format::kReferenceVersion);
 }
 
+// gpu_playable: a stream that is version 4 anyway is the same bytes; one that the default leaves on the residual loop
+// (a few frames of the bending sphere, where the bases do not pay) becomes version 4 within the error target, and
+// decodes to the encoder's frames; the setting is refused where no version 4 can be written.
+TEST(TransformResiduals, GpuPlayableWritesVersionFourWithinTheTarget) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  CodecSettings playable = error(0.15);
+  playable.gpu_playable = true;
+  const Encoded anyway = encode(clips, base, error(0.15));
+  ASSERT_EQ(anyway.stream[4], format::kTransformVersion);
+  EXPECT_EQ(encode(clips, base, playable).stream, anyway.stream);
+
+  const std::vector<FrameSequence> short_clip = {bending_clip(3, 0.3, 0)};
+  const std::vector<float> short_base = quantized_base(short_clip[0]);
+  for (double target : {0.15, 0.5}) {
+    SCOPED_TRACE(target);
+    playable.target = target;
+    const Encoded loop = encode(short_clip, short_base, error(target)),
+                  forced = encode(short_clip, short_base, playable);
+    EXPECT_LE(loop.stream[4], format::kReferenceVersion);
+    ASSERT_EQ(forced.stream[4], format::kTransformVersion);
+    EXPECT_LE(kg(short_clip, forced.reconstruction), target);
+    std::vector<FrameSequence> decoded;
+    ASSERT_TRUE(decode_animation(forced.stream.data(), forced.stream.size(), short_base, short_clip[0].triangles,
+                                 decoded).ok());
+    EXPECT_EQ(decoded[0].positions, forced.reconstruction[0].positions);
+  }
+
+  CodecSettings table = playable, bpvf = playable, lossless = playable, no_transform = playable;
+  table.table_residuals = true;
+  bpvf.mode = RateMode::bpvf;
+  bpvf.target = 2;
+  lossless.mode = RateMode::lossless;
+  no_transform.transform_residuals = false;
+  for (const CodecSettings& settings : {table, bpvf, lossless, no_transform}) {
+    std::vector<uint8_t> stream;
+    EXPECT_EQ(encode_animation(clips, base, settings, stream).code(), StatusCode::invalid_argument);
+  }
+}
+
 // A stream that breaks version 4's rules is refused, never decoded: residual-loop flags, a basis source or size out
 // of range, a bad step, a coefficient beyond the limit; and every prefix of a valid stream.
 TEST(TransformResidualsHostile, BrokenStreamsAreRefused) {

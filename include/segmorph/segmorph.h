@@ -124,6 +124,13 @@ struct PrimitiveInfo {
   std::string kind;  // "morph", "skinned" or "morph+skinned"
   size_t vertices = 0, triangles = 0, welded_vertices = 0, connected_components = 0;
   std::vector<ClipInfo> clips;
+  // In an encoded file: the version of the primitive's SEGMORPH_animation_compression stream (0: it has none, e.g. a
+  // kept skin), whether that stream keeps morph targets, and whether it plays on the GPU from its model (a version-4
+  // stream of clips: the three.js plugin's default playback; kept targets play as morph targets, other streams as
+  // decoded frames).
+  int stream_version = 0;
+  bool kept_targets = false;
+  bool gpu_playable = false;
 };
 
 struct InfoReport {
@@ -176,6 +183,10 @@ struct EncodeSettings {
   // and no motion contexts; below 4, no transform-coded residuals (the encoder uses each only where it makes a stream
   // smaller; version 4 only with error targets and without fast_decode); fast_decode needs 2.
   int max_stream_version = 4;
+  // Only GPU-playable streams: every stream of clips version 4 (its model is what a player evaluates in the vertex
+  // shader, docs/runtime.md), even where version 3 would be smaller; an encode where a primitive cannot have one at
+  // the error target fails (UNSUPPORTED). Kept morph targets are coded as without it (they play as morph targets). Error targets only, not with fast_decode or a max_stream_version below 4.
+  bool gpu_playable = false;
   // Threads for the stages that split their work (the motion fits and refinement, the residual steps' measurement of
   // rate control, the comparison with the input); 0: every hardware thread. The output is the same bytes for every
   // number.
@@ -222,6 +233,8 @@ struct EncodedPrimitive {
   int output_mesh = -1, output_primitive = -1;  // where it is in the encoded file
   size_t clusters = 0;                          // K of its stream (frames and kept targets)
   size_t bytes = 0;                             // its animation stream and its Draco mesh
+  int stream_version = 0;                       // of its stream (0: none, e.g. a kept skin)
+  bool gpu_playable = false;                    // a version-4 stream of clips: plays on the GPU from its model
   // The animated primitive of the input it plays, measured on the decoded encode as verify measures it. A rigid
   // mesh's primitive (error.mesh and primitive are its output_mesh and output_primitive) is measured in model space
   // at the key times of the clips that move its (first) node, its KG over the part's own spread; verify does not
