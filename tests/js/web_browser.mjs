@@ -2,22 +2,22 @@
 // by playwright-core; no browser download) against web/serve.mjs on 127.0.0.1.
 //   1. Every sample (and, when present, every shared sample and sequence) encoded by segmorph in several modes; the
 //      page (web_pages/compare.js) loads each with GLTFLoader and the plugin, plays every clip with AnimationMixer and
-//      reads the positions three.js computes at every frame time; they must equal those of the file segmorph decode
+//      reads the positions three.js computes at every frame time with { playback: 'morph' } (GPU playback, the
+//      default, is web_gpu.mjs's); they must equal those of the file segmorph decode
 //      wrote, loaded without the plugin, within three's own float arithmetic (1e-5 of the scene's diagonal). Also
 //      with the plugin's streaming playback and with workers.
 //   2. A damaged and a truncated stream make the loader's promise reject with a message naming the extension, without
 //      a hang or a crashed page.
 //   3. The viewer (web/viewer) plays a compressed file dropped on it: its render is not empty and changes between two
-//      times.
+//      times, and it shows the GPU bytes and how the file plays (on the GPU for the cow).
 //
 //   node tests/js/web_browser.mjs SEGMORPH WEB_DIR WORK_DIR SAMPLES_DIR SHARED_SAMPLES_DIR
 import { execFileSync } from 'node:child_process';
-import { existsSync, mkdirSync, readdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { chromium } from 'playwright-core';
-
+import { inputsUnder, launchChromium } from './chromium.mjs';
 import { glbBytes, readAsset } from './glb.mjs';
 import { serve } from '../../web/serve.mjs';
 
@@ -34,11 +34,6 @@ let failures = 0;
 const fail = (message) => { console.error(`web_browser: FAIL: ${message}`); failures += 1; };
 const log = (message) => console.log(`web_browser: ${message}`);
 
-// The inputs: .glb and .gltf files one folder down.
-const inputsUnder = (directory) => existsSync(directory)
-  ? readdirSync(directory, { withFileTypes: true }).filter((e) => e.isDirectory()).flatMap((e) =>
-      readdirSync(path.join(directory, e.name)).filter((f) => /\.(glb|gltf)$/.test(f)).map((f) => path.join(directory, e.name, f)))
-  : [];
 const inputs = [...inputsUnder(samples), ...inputsUnder(path.join(shared, 'gltf')), ...inputsUnder(path.join(shared, 'sequences'))]
   .filter((f) => !f.includes('MorphPrimitivesTest'));
 if (!existsSync(shared)) log(`${shared} is absent: the shared samples and sequences are skipped`);
@@ -72,12 +67,7 @@ writeFileSync(path.join(work, 'truncated.glb'), glbBytes(cut, cube.buffers[0]));
 
 const server = await serve({ web: webDir, roots: { '/pages/': path.join(here, 'web_pages'), '/files/': work } });
 const origin = `http://127.0.0.1:${server.address().port}`;
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium',
-  headless: true,
-  args: ['--no-sandbox', '--disable-gpu', '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
-         '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
-});
+const browser = await launchChromium();
 try {
   const page = await browser.newPage();
   page.setDefaultTimeout(120000);
@@ -88,10 +78,11 @@ try {
   await page.waitForFunction(() => window.ready === true, null, { timeout: 60000 });
 
   // 1. Every case, and the cow (or the first clip file) streamed and in workers.
-  const runs = cases.map((c) => ({ ...c, options: {} }));
+  // Morph targets (GPU playback, the default, is tested in web_gpu.mjs: its positions are not on the CPU).
+  const runs = cases.map((c) => ({ ...c, options: { playback: 'morph' } }));
   const clipCase = cases.find((c) => c.label === 'cow default') ?? cases.find((c) => c.label === 'Fox bake-fast');
   runs.push({ ...clipCase, label: `${clipCase.label}, streaming`, options: { streaming: true } });
-  runs.push({ ...clipCase, label: `${clipCase.label}, 2 workers`, options: { workers: 2 } });
+  runs.push({ ...clipCase, label: `${clipCase.label}, 2 workers`, options: { workers: 2, playback: 'morph' } });
   let frames = 0;
   for (const run of runs) {
     try {
@@ -166,7 +157,10 @@ try {
   await viewer.screenshot({ path: path.join(work, 'viewer.png') });
   const viewerLine = `viewer: ${shown.text}; ${shown.covered} of ${shown.pixels} pixels show the model, ${shown.changed} change ` +
                      `from time 0 to half the clip (screenshot ${path.join(work, 'viewer.png')})`;
-  if (shown.covered < shown.pixels * 0.005 || shown.changed === 0) fail(viewerLine);
+  // It says what the file takes on the GPU and how it plays (the cow's version-4 stream: on the GPU).
+  const playsOnGpu = clipCase.label === 'cow default';
+  if (shown.covered < shown.pixels * 0.005 || shown.changed === 0 || !/GPU [0-9.]+ MB/.test(shown.text ?? '') ||
+      (playsOnGpu && !/on the GPU/.test(shown.text))) fail(viewerLine);
   else log(viewerLine);
 
   const unexpected = consoleErrors.filter((text) => !/SEGMORPH_animation_compression/.test(text));

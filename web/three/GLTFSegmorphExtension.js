@@ -9,12 +9,15 @@
 //   loader.register((parser) => new GLTFSegmorphExtension(parser));
 //
 // What it does with each part of the extension (docs/web.md):
-// - a primitive that plays clips: its stream is decoded against the Draco base mesh; every frame of every clip
-//   becomes an absolute morph target (geometry.morphTargetsRelative = false), the geometry's POSITION becomes frame 0
+// - a primitive that plays clips, with { playback: 'gpu' } (the default) and a version-4 stream: the stream's model
+//   (docs/runtime.md, "Playing the model") is uploaded once and the mesh's material evaluates it in the vertex shader
+//   (see GpuPlayback below); the AnimationClips drive morphTargetInfluences over the frames as with morph targets;
+// - a primitive that plays clips with { playback: 'morph' } (or a version 1-3 stream under 'gpu'): its stream is
+//   decoded against the Draco base mesh; every frame of every clip becomes an absolute morph target (geometry.morphTargetsRelative = false), the geometry's POSITION becomes frame 0
 //   of clip 0 (what the primitive shows when no clip plays), and each clip's AnimationClip (the glTF animation the
 //   clip names, with its name and times) gets a morphTargetInfluences track that is 1 on the frame's target at the
-//   frame's time (LINEAR or STEP as the clip says). With { streaming: true } it keeps the stream instead and decodes
-//   the shown frame into POSITION (see StreamingPlayback below). Normals turn with the surface unless
+//   frame's time (LINEAR or STEP as the clip says). With { playback: 'stream' } it keeps the stream instead and
+//   decodes the shown frame into POSITION (see StreamingPlayback below). Normals turn with the surface unless
 //   { normals: false };
 // - a primitive that keeps its morph targets: the targets' POSITION (and NORMAL) displacements are filled in; the
 //   node's weights animation plays them as usual;
@@ -22,7 +25,11 @@
 //   of their accessors, so they become ordinary KeyframeTracks;
 // - placeholder channels play a constant; they stay.
 // A damaged or mismatched stream makes the load fail with an Error that names the mesh, primitive or animation.
-import { BufferAttribute, InterpolateDiscrete, InterpolateLinear, NumberKeyframeTrack } from 'three';
+import {
+  Box3, BufferAttribute, BufferGeometry, Camera, DataTexture, FloatType, GLSL3, IntType, InterpolateDiscrete,
+  InterpolateLinear, MeshDepthMaterial, MeshDistanceMaterial, NearestFilter, NumberKeyframeTrack, Points, RGBAFormat,
+  RGBFormat, Scene, ShaderMaterial, Sphere, Vector3, WebGLRenderTarget,
+} from 'three';
 
 import { SegmorphDecoder } from '../segmorph_decoder.js';
 
@@ -30,12 +37,17 @@ const NAME = 'SEGMORPH_animation_compression';
 const PATHS = { translation: 0, rotation: 1, scale: 2 };
 
 export class GLTFSegmorphExtension {
-  // options: normals (default true): turn the normals with the surface in every frame or target; streaming (default
-  // false): decode the shown frame of a clip primitive on demand instead of making every frame a morph target.
+  // options: playback (default 'gpu'): how a clip primitive plays: 'gpu' evaluates a version-4 stream's model in the
+  // vertex shader (other versions play as 'morph'), 'morph' makes every frame a morph target, 'stream' decodes the
+  // shown frame on demand ({ streaming: true } is the same as 'stream'); normals (default true): turn the normals with
+  // the surface in every frame or target.
   constructor(parser, options = {}) {
     this.name = NAME;
     this.parser = parser;
-    this.options = { normals: true, streaming: false, ...options };
+    this.options = { normals: true, playback: options.streaming ? 'stream' : 'gpu', ...options };
+    if (!['gpu', 'morph', 'stream'].includes(this.options.playback))
+      throw new Error(`${NAME}: playback must be 'gpu', 'morph' or 'stream', not '${this.options.playback}'`);
+    this.playbacks = [];  // per clip primitive: { what, mode: 'gpu' | 'morph' | 'stream', version }
     this.views = new Map();  // synthetic bufferView index → the decoded bytes (coded tracks)
     this.decodeMilliseconds = 0;  // time spent in the decoder (for viewers and benchmarks)
   }
@@ -46,7 +58,7 @@ export class GLTFSegmorphExtension {
     try {
       return await decode();
     } catch (error) {
-      throw new Error(`${what}: ${error.message}`);
+      throw Object.assign(new Error(`${what}: ${error.message}`), { unsupported: error.unsupported === true });
     } finally {
       this.decodeMilliseconds += performance.now() - started;
     }
@@ -150,9 +162,30 @@ export class GLTFSegmorphExtension {
     const geometry = meshes[0].geometry;
     const { stream, positions, indices } = await this._inputs(geometry, extension, what);
     const times = await Promise.all(extension.clips.map((clip) => this.parser.getDependency('accessor', clip.times)));
-    if (this.options.streaming) return this._streaming(meshes, extension, animations, stream, positions, indices, times, what);
+    if (this.options.playback === 'stream') {
+      this.playbacks.push({ what, mode: 'stream' });
+      return this._streaming(meshes, extension, animations, stream, positions, indices, times, what);
+    }
+    if (this.options.playback === 'gpu') {
+      let model = null;
+      try {
+        model = await this._timed(what, () => SegmorphDecoder.decodeModelAsync(stream, positions, indices));
+      } catch (error) {
+        if (!error.unsupported) throw error;  // damaged: reject; versions 1-3: morph targets below
+      }
+      if (model) {
+        checkClips(model.clipFrames, extension, times, what);
+        this.playbacks.push({ what, mode: 'gpu', version: model.version });
+        const player = new GpuPlayback(model, geometry, meshes, this.options.normals);
+        extension.clips.forEach((clip, c) => {
+          for (const mesh of meshes) addTrack(animations, clip.animation, player.track(mesh, c, times[c].array, clip.interpolation), what);
+        });
+        return;
+      }
+    }
     const decoded = await this._timed(what, () => SegmorphDecoder.decodeStreamAsync(stream, positions, indices));
     checkClips(decoded.clips.map((c) => c.frameCount), extension, times, what);
+    this.playbacks.push({ what, mode: 'morph', version: decoded.version });
     // Every frame an absolute target: at weight 1 on one target the position is that frame exactly.
     const floats = positions.length, targets = [], normalTargets = [];
     const normal = geometry.getAttribute('normal');
@@ -369,4 +402,340 @@ export class StreamingPlayback {
       this.geometry.getAttribute('normal').needsUpdate = true;
     }
   }
+}
+
+// The vertex shader's evaluation of a version-4 model (docs/runtime.md, "Playing the model"): the arithmetic of the
+// C API's segmorph_decoder_model_evaluate, in its order. segmorphParameters holds the shown parameters (cluster k's
+// [A | t] rows at texels 3k, 3k + 1, 3k + 2, then the basis values, 4 per texel, from texel 3K); segmorphClusters
+// row k its centroid and (first basis value, m_k); segmorphCoefficients the coefficient vectors. Per vertex:
+// segmorphCluster and segmorphWeight its (cluster, weight) pairs, the own cluster first, and segmorphCoefficient the
+// texel of its first coefficient vector. segmorphPosition(x) is the position at base position x.
+export const SEGMORPH_MODEL_GLSL = /* glsl */`
+uniform highp sampler2D segmorphParameters;
+uniform highp sampler2D segmorphClusters;
+uniform highp sampler2D segmorphCoefficients;
+in uvec4 segmorphCluster;
+in vec4 segmorphWeight;
+in uint segmorphCoefficient;
+
+vec4 segmorphTexel( highp sampler2D map, int i ) {
+	int width = textureSize( map, 0 ).x;
+	return texelFetch( map, ivec2( i % width, i / width ), 0 );
+}
+
+vec3 segmorphPosition( vec3 x ) {
+	vec3 p = vec3( 0.0 );
+	for ( int j = 0; j < 4; ++ j ) {
+		float omega = segmorphWeight[ j ];
+		if ( omega == 0.0 ) continue;
+		int k = int( segmorphCluster[ j ] );
+		vec3 d = x - texelFetch( segmorphClusters, ivec2( 0, k ), 0 ).xyz;
+		vec4 r0 = segmorphTexel( segmorphParameters, k * 3 );
+		vec4 r1 = segmorphTexel( segmorphParameters, k * 3 + 1 );
+		vec4 r2 = segmorphTexel( segmorphParameters, k * 3 + 2 );
+		vec3 y = vec3( ( ( r0.x * d.x + r0.y * d.y ) + r0.z * d.z ) + r0.w,
+		               ( ( r1.x * d.x + r1.y * d.y ) + r1.z * d.z ) + r1.w,
+		               ( ( r2.x * d.x + r2.y * d.y ) + r2.z * d.z ) + r2.w );
+		p = p + omega * y;
+	}
+	ivec2 basis = ivec2( texelFetch( segmorphClusters, ivec2( 1, int( segmorphCluster.x ) ), 0 ).xy );
+	int values = 3 * textureSize( segmorphClusters, 0 ).y;
+	int offset = int( segmorphCoefficient );
+	vec3 r = vec3( 0.0 );
+	for ( int i = 0; i < basis.y; ++ i ) {
+		int v = basis.x + i;
+		float b = segmorphTexel( segmorphParameters, values + ( v >> 2 ) )[ v & 3 ];
+		r = r + segmorphTexel( segmorphCoefficients, offset + i ).xyz * b;
+	}
+	return p + r;
+}
+`;
+
+// Normals that turn with the surface, as segmorph decode and the 'morph' playback turn them (SurfaceNormals): the
+// base normal turned by the smallest rotation taking the base surface normal around the vertex's point (segmorphSurface,
+// the normalized sum of its triangles' cross products) to today's, summed over the same triangles (segmorphRing: the
+// first and the count of its entries in segmorphTriangles, each a triangle's three vertices) from segmorphShape, every
+// vertex's position at the shown parameters (a pass of its own before the mesh is drawn).
+export const SEGMORPH_NORMAL_GLSL = /* glsl */`
+uniform highp sampler2D segmorphShape;
+uniform highp sampler2D segmorphTriangles;
+in vec3 segmorphSurface;
+in uvec2 segmorphRing;
+
+vec3 segmorphNormal( vec3 n ) {
+	vec3 now = vec3( 0.0 );
+	for ( int i = 0; i < int( segmorphRing.y ); ++ i ) {
+		ivec3 t = ivec3( segmorphTexel( segmorphTriangles, int( segmorphRing.x ) + i ).xyz );
+		vec3 a = segmorphTexel( segmorphShape, t.x ).xyz;
+		now += cross( segmorphTexel( segmorphShape, t.y ).xyz - a, segmorphTexel( segmorphShape, t.z ).xyz - a );
+	}
+	float size = length( now );
+	if ( size > 0.0 ) now /= size;
+	vec3 c = cross( segmorphSurface, now );
+	float cosine = dot( segmorphSurface, now );
+	if ( cosine > -0.999999 ) n = n * cosine + cross( c, n ) + c * ( dot( c, n ) / ( 1.0 + cosine ) );
+	return n;
+}
+`;
+
+// The width of a texture that holds `count` texels in rows: a power of two near the square's side.
+function textureWidth(count) {
+  let width = 1;
+  while (width * width < count) width *= 2;
+  return width;
+}
+
+// A float texture of `count` texels of `channels` floats from `values` (padded with zeros), read by texelFetch.
+function dataTexture(values, count, channels) {
+  const width = textureWidth(Math.max(count, 1)), height = Math.max(1, Math.ceil(count / width));
+  const data = new Float32Array(width * height * channels);
+  data.set(values.subarray(0, Math.min(values.length, data.length)));
+  const texture = new DataTexture(data, width, height, channels === 4 ? RGBAFormat : RGBFormat, FloatType);
+  if (channels === 3) texture.internalFormat = 'RGB32F';
+  texture.minFilter = texture.magFilter = NearestFilter;
+  texture.generateMipmaps = false;
+  texture.needsUpdate = true;
+  return texture;
+}
+
+// The surface around each vertex's point for SEGMORPH_NORMAL_GLSL: per vertex its point's base surface normal and
+// (first, count) of its triangles, and the triangles of every point in a list, as SurfaceNormals sums them.
+function surfaceRings(positions, indices) {
+  const count = positions.length / 3, keys = new Map(), point = new Uint32Array(count);
+  for (let v = 0; v < count; ++v) {
+    const key = `${positions[v * 3]},${positions[v * 3 + 1]},${positions[v * 3 + 2]}`;
+    if (!keys.has(key)) keys.set(key, keys.size);
+    point[v] = keys.get(key);
+  }
+  const points = keys.size, first = new Uint32Array(points + 1);
+  for (let i = 0; i + 2 < indices.length; i += 3) for (let j = 0; j < 3; ++j) first[point[indices[i + j]] + 1] += 1;
+  for (let p = 0; p < points; ++p) first[p + 1] += first[p];
+  const at = first.slice(0, points), list = new Float32Array(first[points] * 3);
+  for (let i = 0; i + 2 < indices.length; i += 3)
+    for (let j = 0; j < 3; ++j) {
+      const e = at[point[indices[i + j]]]++;
+      list[e * 3] = indices[i], list[e * 3 + 1] = indices[i + 1], list[e * 3 + 2] = indices[i + 2];
+    }
+  const base = new SurfaceNormals(positions, indices, new Float32Array(0)).base;
+  const surface = new Float32Array(count * 3), ring = new Uint32Array(count * 2);
+  for (let v = 0; v < count; ++v) {
+    const p = point[v];
+    surface.set(base.subarray(p * 3, p * 3 + 3), v * 3);
+    ring[v * 2] = first[p];
+    ring[v * 2 + 1] = first[p + 1] - first[p];
+  }
+  return { surface, ring, list, entries: first[points] };
+}
+
+// GPU playback of a clip primitive (the plugin's default for version-4 streams): the model's per-vertex data become
+// attributes of the geometry (per vertex its 4 clusters, 4 weights and first coefficient texel, gathered from its
+// welded vertex), its coefficients and clusters two float textures, and each mesh gets a texture of the shown
+// parameters (K × 12 floats and the N basis values) and its own clone of its materials, patched to evaluate the model
+// (SEGMORPH_MODEL_GLSL), as are its customDepthMaterial and customDistanceMaterial so that shadows follow. POSITION
+// and NORMAL stay the base mesh's. The AnimationClips drive mesh.morphTargetInfluences over the frames (one per frame,
+// one-hot at the frame times, as with morph targets); before the mesh is drawn (onBeforeRender, onBeforeShadow) the
+// parameters are blended by its influences, frame f by weight w_f and frame 0 of clip 0 by 1 − Σ w_f, which is exact
+// because positions are linear in the parameters: LINEAR and STEP clips, cross-fades, several actions and seeking
+// show what the absolute morph targets would. They are uploaded only when the influences change. With normals, a
+// pass before the mesh is drawn (in onBeforeRender) evaluates every vertex into a float texture (segmorphShape) from
+// which the material turns the normals with the surface (SEGMORPH_NORMAL_GLSL). The bounds are the model's (every
+// frame inside).
+export class GpuPlayback {
+  constructor(model, geometry, meshes, normals) {
+    this.model = model;
+    const { vertexCount: V, clusterCount: K, frameCount: F, coefficientCount: C } = model;
+    this.frameCounts = model.clipFrames;
+    const wide = K > 65535;
+    const clusters = wide ? new Uint32Array(V * 4) : new Uint16Array(V * 4), weights = new Float32Array(V * 4);
+    const first = new Uint32Array(V);
+    for (let v = 0; v < V; ++v) {
+      const w = model.welded[v];
+      for (let j = 0; j < 4; ++j) {
+        clusters[v * 4 + j] = model.clusters[w * 4 + j];
+        weights[v * 4 + j] = model.weights[w * 4 + j];
+      }
+      first[v] = model.coefficientOffsets[w];
+    }
+    const clusterAttribute = new BufferAttribute(clusters, 4);
+    clusterAttribute.gpuType = IntType;  // an integer attribute (uvec4), Uint16 or Uint32
+    geometry.setAttribute('segmorphCluster', clusterAttribute);
+    geometry.setAttribute('segmorphWeight', new BufferAttribute(weights, 4));
+    geometry.setAttribute('segmorphCoefficient', new BufferAttribute(first, 1));  // Uint32: uint
+    const clusterData = new Float32Array(K * 8);
+    for (let k = 0; k < K; ++k) {
+      clusterData.set(model.centroids.subarray(k * 3, k * 3 + 3), k * 8);
+      clusterData[k * 8 + 4] = model.bases[k * 2];
+      clusterData[k * 8 + 5] = model.bases[k * 2 + 1];
+    }
+    this.clusterTexture = new DataTexture(clusterData, 2, K, RGBAFormat, FloatType);
+    this.clusterTexture.minFilter = this.clusterTexture.magFilter = NearestFilter;
+    this.clusterTexture.needsUpdate = true;
+    this.coefficientTexture = dataTexture(model.coefficients, C, 3);
+    const b = model.bounds;
+    geometry.boundingBox = new Box3(new Vector3(b[0], b[1], b[2]), new Vector3(b[3], b[4], b[5]));
+    geometry.boundingSphere = geometry.boundingBox.getBoundingSphere(new Sphere());
+    // Vertex indices are read from float textures: exact below 2^24.
+    this.normals = normals && geometry.getAttribute('normal') !== undefined && V < 1 << 24;
+    if (this.normals) {
+      const rings = surfaceRings(geometry.getAttribute('position').array, geometry.index.array);
+      geometry.setAttribute('segmorphSurface', new BufferAttribute(rings.surface, 3));
+      geometry.setAttribute('segmorphRing', new BufferAttribute(rings.ring, 2));  // Uint32: uvec2
+      this.triangleTexture = dataTexture(rings.list, rings.entries, 3);
+    }
+    for (const mesh of meshes) this._attach(mesh, F);
+  }
+
+  _attach(mesh, frameCount) {
+    const { clusterCount: K, basisCount: N, vertexCount: V } = this.model;
+    const parameters = dataTexture(new Float32Array(0), K * 3 + Math.ceil(N / 4), 4);
+    const uniforms = {
+      segmorphParameters: { value: parameters },
+      segmorphClusters: { value: this.clusterTexture },
+      segmorphCoefficients: { value: this.coefficientTexture },
+    };
+    // mesh.segmorph: this player, the mesh's parameter texture and its uniforms (for a ShaderMaterial of its own that
+    // evaluates the model, e.g. to read positions back), the influences last uploaded and the parameters' version.
+    const state = { player: this, texture: parameters, uniforms, shown: new Float64Array(frameCount).fill(NaN),
+                    version: 0, shapeVersion: -1, shape: null };
+    mesh.segmorph = state;
+    if (this.normals) {
+      const width = textureWidth(V), height = Math.ceil(V / width);
+      state.shape = new WebGLRenderTarget(width, height, { type: FloatType, format: RGBAFormat, minFilter: NearestFilter,
+                                                           magFilter: NearestFilter, depthBuffer: false });
+      uniforms.segmorphShape = { value: state.shape.texture };
+      uniforms.segmorphTriangles = { value: this.triangleTexture };
+      const points = new BufferGeometry();
+      for (const name of ['position', 'segmorphCluster', 'segmorphWeight', 'segmorphCoefficient'])
+        points.setAttribute(name, mesh.geometry.getAttribute(name));
+      const pass = new Points(points, new ShaderMaterial({
+        glslVersion: GLSL3,
+        uniforms,
+        vertexShader: `${SEGMORPH_MODEL_GLSL}
+out vec3 segmorphShapePosition;
+void main() {
+	vec2 pixel = vec2( float( gl_VertexID % ${width} ) + 0.5, float( gl_VertexID / ${width} ) + 0.5 );
+	gl_Position = vec4( pixel / vec2( ${width}.0, ${height}.0 ) * 2.0 - 1.0, 0.0, 1.0 );
+	gl_PointSize = 1.0;
+	segmorphShapePosition = segmorphPosition( position );
+}`,
+        fragmentShader: `in vec3 segmorphShapePosition;
+out vec4 segmorphShapeColour;
+void main() { segmorphShapeColour = vec4( segmorphShapePosition, 1.0 ); }`,
+        depthTest: false,
+        depthWrite: false,
+      }));
+      pass.frustumCulled = false;
+      state.shapePass = { scene: new Scene().add(pass), camera: new Camera() };
+    }
+    mesh.morphTargetInfluences = new Array(frameCount).fill(0);
+    mesh.morphTargetDictionary = {};
+    const patch = (material) => patchMaterial(material, uniforms, this.normals);
+    mesh.material = Array.isArray(mesh.material) ? mesh.material.map(patch) : patch(mesh.material);
+    mesh.customDepthMaterial = patchMaterial(mesh.customDepthMaterial ?? new MeshDepthMaterial(), uniforms, false);
+    mesh.customDistanceMaterial = patchMaterial(mesh.customDistanceMaterial ?? new MeshDistanceMaterial(), uniforms, false);
+    const beforeShadow = mesh.onBeforeShadow, beforeRender = mesh.onBeforeRender;
+    mesh.onBeforeShadow = (...args) => {
+      this.update(mesh);
+      beforeShadow.apply(mesh, args);
+    };
+    mesh.onBeforeRender = (renderer, ...rest) => {
+      this.update(mesh);
+      this.shape(mesh, renderer);
+      beforeRender.call(mesh, renderer, ...rest);
+    };
+    this.update(mesh);
+  }
+
+  // The track that plays clip c on `mesh`: one-hot influences on the clip's frames at its times.
+  track(mesh, c, keys, interpolation) {
+    let first = 0;
+    for (let i = 0; i < c; ++i) first += this.frameCounts[i];
+    const count = this.frameCounts[c], total = mesh.morphTargetInfluences.length;
+    const values = new Float32Array(count * total);
+    for (let f = 0; f < count; ++f) values[f * total + first + f] = 1;
+    return new NumberKeyframeTrack(`${mesh.uuid}.morphTargetInfluences`, Array.from(keys), values,
+                                   interpolation === 'STEP' ? InterpolateDiscrete : InterpolateLinear);
+  }
+
+  // The parameters at `influences` (one weight per frame): Σ w_f P_f + (1 − Σ w_f) P_0, into `out` (K × 12 motion
+  // floats, then N basis values).
+  blend(influences, out) {
+    const { clusterCount: K, basisCount: N, motion, basis } = this.model, M = K * 12;
+    const sum = new Float64Array(M + N);
+    let rest = 1;
+    const add = (f, w) => {
+      for (let i = 0; i < M; ++i) sum[i] += w * motion[f * M + i];
+      for (let i = 0; i < N; ++i) sum[M + i] += w * basis[f * N + i];
+    };
+    for (let f = 0; f < influences.length; ++f) {
+      const w = influences[f];
+      if (w === 0) continue;
+      add(f, w);
+      rest -= w;
+    }
+    if (rest !== 0) add(0, rest);
+    for (let i = 0; i < M + N; ++i) out[i] = sum[i];
+    return out;
+  }
+
+  // Uploads the mesh's parameters when its influences changed since the last draw.
+  update(mesh) {
+    const state = mesh.segmorph, influences = mesh.morphTargetInfluences;
+    let changed = false;
+    for (let f = 0; f < influences.length; ++f)
+      if (state.shown[f] !== influences[f]) { changed = true; state.shown[f] = influences[f]; }
+    if (!changed) return;
+    this.blend(influences, state.texture.image.data);
+    state.texture.needsUpdate = true;
+    state.version += 1;
+  }
+
+  // With normals: every vertex's position at the mesh's parameters into its shape texture, when they changed (a
+  // render of its own, as three.js's Reflector renders in onBeforeRender).
+  shape(mesh, renderer) {
+    const state = mesh.segmorph;
+    if (!state.shape || state.shapeVersion === state.version) return;
+    state.shapeVersion = state.version;
+    const target = renderer.getRenderTarget(), face = renderer.getActiveCubeFace(), level = renderer.getActiveMipmapLevel();
+    const xr = renderer.xr.enabled, shadows = renderer.shadowMap.autoUpdate;
+    renderer.xr.enabled = false;
+    renderer.shadowMap.autoUpdate = false;
+    renderer.setRenderTarget(state.shape);
+    renderer.render(state.shapePass.scene, state.shapePass.camera);
+    renderer.setRenderTarget(target, face, level);
+    renderer.xr.enabled = xr;
+    renderer.shadowMap.autoUpdate = shadows;
+  }
+
+  // Frees what this player and `meshes` (its meshes) hold on the GPU beyond their geometry and materials.
+  dispose(meshes = []) {
+    this.clusterTexture.dispose();
+    this.coefficientTexture.dispose();
+    this.triangleTexture?.dispose();
+    for (const mesh of meshes) {
+      mesh.segmorph?.texture.dispose();
+      mesh.segmorph?.shape?.dispose();
+    }
+  }
+}
+
+// `material` cloned and patched to evaluate the model with `uniforms` (its program shared by every such material).
+function patchMaterial(material, uniforms, normals) {
+  const patched = material.clone();
+  const previous = material.onBeforeCompile, previousKey = material.customProgramCacheKey;
+  patched.onBeforeCompile = (shader, renderer) => {
+    previous.call(patched, shader, renderer);
+    Object.assign(shader.uniforms, uniforms);
+    shader.vertexShader = shader.vertexShader
+      .replace('#include <common>', `#include <common>\n${SEGMORPH_MODEL_GLSL}${normals ? SEGMORPH_NORMAL_GLSL : ''}`)
+      .replace('#include <begin_vertex>', '#include <begin_vertex>\n\ttransformed = segmorphPosition( transformed );');
+    if (normals)
+      shader.vertexShader = shader.vertexShader.replace('#include <beginnormal_vertex>', `#include <beginnormal_vertex>
+	objectNormal = segmorphNormal( objectNormal );
+	#ifdef USE_TANGENT
+		objectTangent = segmorphNormal( objectTangent );
+	#endif`);
+  };
+  patched.customProgramCacheKey = () => `segmorph-model:${normals ? 1 : 0}:${previousKey.call(material)}`;
+  return patched;
 }

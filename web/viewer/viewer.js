@@ -1,12 +1,17 @@
 // The segmorph viewer (web/viewer/index.html): open or drop a .glb, plain or compressed by segmorph, and it plays,
-// with play/pause, a clip list and a time slider; it shows the file's bytes, the load and decode times, and the
-// vertices, frames and clips. The page exposes window.viewer for tests (tests/web).
+// with play/pause, a clip list and a time slider; it shows the file's bytes, the GPU bytes its first frame allocated
+// (WebGL's allocation calls counted, web/gpu_bytes.js) and how its primitives play (the plugin's default: on the GPU
+// from their model where the stream is version 4), the load and decode times, and the vertices, frames and clips.
+// The page exposes window.viewer for tests (tests/js/web_browser.mjs).
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
 import { GLTFSegmorphExtension } from '../three/GLTFSegmorphExtension.js';
+import { gpuBytes, install, release } from '../gpu_bytes.js';
+
+install();  // before the renderer makes its context
 
 const element = (id) => document.getElementById(id);
 const view = element('view');
@@ -77,14 +82,27 @@ function describe(gltf, bytes, milliseconds, decodeMilliseconds) {
   return { bytes, milliseconds, decodeMilliseconds, vertices, frames, clips: gltf.animations.length };
 }
 
+// How the file's compressed primitives play: "on the GPU", "as morph targets" or both with counts.
+function playbackText(plugin) {
+  const names = { gpu: 'on the GPU', morph: 'as morph targets', stream: 'streamed' }, counts = new Map();
+  for (const p of plugin?.playbacks ?? []) counts.set(p.mode, (counts.get(p.mode) ?? 0) + 1);
+  if (counts.size === 0) return '';
+  const total = [...counts.values()].reduce((a, b) => a + b, 0);
+  return `, ${[...counts].map(([mode, n]) => (counts.size > 1 || total > 1 ? `${n} ` : '') + names[mode]).join(', ')}`;
+}
+
 export async function open(buffer, name) {
   const started = performance.now();
+  const before = gpuBytes.allocated;
   const loader = new GLTFLoader().setDRACOLoader(draco);
   let plugin = null;
   loader.register((parser) => (plugin = new GLTFSegmorphExtension(parser)));
   const gltf = await loader.parseAsync(buffer, '');
   const milliseconds = performance.now() - started;
-  if (state.root) scene.remove(state.root);
+  if (state.root) {
+    scene.remove(state.root);
+    release(state.root);
+  }
   state.root = gltf.scene;
   scene.add(gltf.scene);
   state.clips = gltf.animations;
@@ -93,13 +111,18 @@ export async function open(buffer, name) {
   const clips = element('clips');
   clips.replaceChildren(...state.clips.map((clip, i) => new Option(`${clip.name} (${clip.duration.toFixed(2)} s)`, String(i))));
   for (const id of ['clips', 'time', 'play']) element(id).disabled = state.clips.length === 0;
+  frameTheCamera(gltf.scene);
+  playClip(0);
+  state.mixer.update(0);
+  renderer.render(scene, camera);  // the first frame: what the file takes on the GPU
+  state.facts.gpuBytes = gpuBytes.allocated - before;
+  state.facts.playback = playbackText(plugin);
   const f = state.facts;
-  element('facts').textContent = `${name}: ${f.bytes.toLocaleString()} bytes, loaded in ${f.milliseconds.toFixed(1)} ms ` +
+  element('facts').textContent = `${name}: ${f.bytes.toLocaleString()} bytes, ` +
+    `GPU ${(f.gpuBytes / 1e6).toFixed(2)} MB${f.playback}, loaded in ${f.milliseconds.toFixed(1)} ms ` +
     `(segmorph decode ${f.decodeMilliseconds.toFixed(1)} ms), ${f.vertices.toLocaleString()} vertices, ` +
     `${f.frames} frames, ${f.clips} clip${f.clips === 1 ? '' : 's'}`;
   element('drop').classList.add('hidden');
-  frameTheCamera(gltf.scene);
-  playClip(0);
   return { gltf, facts: state.facts };
 }
 

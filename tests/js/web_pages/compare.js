@@ -8,6 +8,7 @@ import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
 
 import { SegmorphDecoder } from '/segmorph_decoder.js';
 import { GLTFSegmorphExtension } from '/three/GLTFSegmorphExtension.js';
+import { meshesOf, pairs } from './meshes.js';
 
 const draco = new DRACOLoader().setDecoderPath('/vendor/three/examples/jsm/libs/draco/');
 
@@ -15,26 +16,6 @@ async function load(url, plugin, options) {
   const loader = new GLTFLoader().setDRACOLoader(draco);
   if (plugin) loader.register((parser) => new GLTFSegmorphExtension(parser, options));
   return loader.loadAsync(url);
-}
-
-function meshes(gltf) {
-  const list = [];
-  gltf.scene.traverse((object) => { if (object.isMesh) list.push(object); });
-  return list;
-}
-
-// Pairs each mesh of `a` with one of `b`: the same name and vertex count, else the next unused one with the count.
-function pairs(a, b) {
-  const used = new Set(), out = [];
-  for (const mesh of a) {
-    const count = mesh.geometry.getAttribute('position').count;
-    const candidates = b.filter((m) => !used.has(m) && m.geometry.getAttribute('position').count === count);
-    const match = candidates.find((m) => m.name === mesh.name) ?? candidates[0];
-    if (!match) throw new Error(`no mesh of the decoded file has ${count} vertices like ${mesh.name}`);
-    used.add(match);
-    out.push([mesh, match]);
-  }
-  return out;
 }
 
 function positions(mesh, streaming) {
@@ -53,7 +34,7 @@ window.compare = async (compressedUrl, decodedUrl, options = {}) => {
   const compressed = await load(compressedUrl, true, options);
   const loadMilliseconds = performance.now() - started;
   const decoded = await load(decodedUrl, false);
-  const meshPairs = pairs(meshes(compressed), meshes(decoded));
+  const meshPairs = pairs(meshesOf(compressed.scene), meshesOf(decoded.scene));
   const box = new THREE.Box3().setFromObject(decoded.scene, true);
   const diagonal = box.getSize(new THREE.Vector3()).length();
   if (compressed.animations.length !== decoded.animations.length)
