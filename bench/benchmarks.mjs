@@ -3,7 +3,7 @@
 // animated sample (rate and distortion), speed and memory per file, how the codec scales, large skinned files and
 // the browser; then docs/benchmarks.md with its charts (docs/bench/*.svg).
 //
-//   node bench/benchmarks.mjs [--parts rd,speed,scaling,large,browser] [--build DIR] [--samples DIR] [--out DIR] [--doc FILE]
+//   node bench/benchmarks.mjs [--parts rd,speed,scaling,large,browser,gpu] [--build DIR] [--samples DIR] [--out DIR] [--doc FILE]
 //   node bench/benchmarks.mjs --quick [--input FILE] [--build DIR] [--out DIR]
 //
 // --build    the Release build folder (default build/)
@@ -30,13 +30,14 @@ import { SCALING, measureScaling } from './lib/scaling.mjs';
 import { LARGE, measureLarge } from './lib/large.mjs';
 import { CORES, benchmarkCodec, measureFile } from './lib/speed.mjs';
 import { measureBrowser } from './lib/browser.mjs';
+import { GPU, measureGpu } from './lib/gpu.mjs';
 import { StepError, Tools, buildSource, gltfFiles, machine, progress, revision } from './lib/tools.mjs';
 import { checkQuick } from './lib/quick_checks.mjs';
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
-const USAGE = 'usage: node bench/benchmarks.mjs [--quick [--input FILE]] [--parts rd,speed,scaling,large,browser] [--build DIR] ' +
+const USAGE = 'usage: node bench/benchmarks.mjs [--quick [--input FILE]] [--parts rd,speed,scaling,large,browser,gpu] [--build DIR] ' +
               '[--samples DIR] [--out DIR] [--doc FILE]';
-const PARTS = ['rd', 'speed', 'scaling', 'large', 'browser'];
+const PARTS = ['rd', 'speed', 'scaling', 'large', 'browser', 'gpu'];
 
 function parseArguments(argv) {
   const options = { quick: false, parts: PARTS, build: path.join(root, 'build'),
@@ -159,6 +160,20 @@ async function main() {
       if (!existsSync(web)) throw new StepError(`${web} is missing; build it: .ci/build release (bash .ci/setup installs its toolchain)`);
       const sequences = files.filter(({ label }) => options.quick || label.startsWith('sequences/'));
       await runPart('browser', options, tools, () => measureBrowser(tools, sequences, path.join(options.out, 'browser'), options.quick));
+    }
+  }
+
+  if (options.parts.includes('gpu')) {
+    tools.require('three');
+    tools.require('codec_scaling');
+    const web = path.join(options.build, 'web', 'segmorph_decoder.wasm');
+    if (!existsSync(web) && options.quick) {
+      progress(`gpu: skipped, ${web} is absent (a build without the WebAssembly decoder)`);
+      rmSync(path.join(options.out, 'results', 'gpu.json'), { force: true });
+    } else {
+      if (!existsSync(web)) throw new StepError(`${web} is missing; build it: .ci/build release (bash .ci/setup installs its toolchain)`);
+      const sequences = files.filter(({ label }) => options.quick || label.startsWith('sequences/'));
+      await runPart('gpu', options, tools, () => measureGpu(tools, sequences, path.join(options.out, 'gpu'), GPU[mode]));
     }
   }
 

@@ -412,6 +412,52 @@ function browserPart(browser, lines, flags) {
   print();
 }
 
+// Playing on the GPU: GPU bytes, load to first frame, time per frame (bench/lib/gpu.mjs).
+function gpuPart(gpu, lines, flags) {
+  const print = (line = '') => lines.push(line);
+  const mb = (bytes) => `${(bytes / 1e6).toFixed(2)} MB`;
+  print('## Playing on the GPU');
+  print();
+  print(`Each sequence encoded by segmorph \`--error ${SPEED_ERROR}\` (stream version 4) and by gltfpack 1.3 \`-cc -af 0 -vp ` +
+        `${SPEED_GLTFPACK_BITS}\`, played in one page of headless Chromium (${gpu.chromium ?? 'Chromium'}, **software ` +
+        'rendering**: SwiftShader\'s WebGL 2 on the CPU, so times are ratios within this run, not what a GPU takes): ' +
+        'segmorph\'s file with the plugin\'s default, the model evaluated in the vertex shader (**gpu**), the same file ' +
+        'with `{ playback: \'morph\' }` (every frame a morph target, **morph**), and gltfpack\'s file with MeshoptDecoder ' +
+        '(morph targets). **GPU bytes**: what the load and the first frame allocate through WebGL (bufferData, texImage, ' +
+        'texStorage, renderbufferStorage counted by web/gpu_bytes.js). **First frame**: from the bytes in memory to the ' +
+        `first drawn frame (the drawing waited for), median of ${gpu.repeats} loads after a first. Per frame, the median ` +
+        `over ${gpu.frames} times of the first clip: **CPU** the time of \`mixer.setTime\` and \`renderer.render\` (the ` +
+        'plugin\'s blend and upload included), **frame** with the drawing waited for (a 1-pixel readPixels), and the ' +
+        'bytes uploaded per frame.');
+  print();
+  print('| sequence | file | brotli | GPU bytes | vs gpu | first frame | CPU per frame | frame | uploaded per frame |');
+  print('|---|---|---|---|---|---|---|---|---|');
+  for (const input of gpu.inputs) {
+    if (input.failed) { flags.push(`${input.label}, gpu: ${input.failed}`); continue; }
+    const p = input.playback;
+    if (!p) continue;
+    for (const [mode, file, name] of [['gpu', input.segmorph, 'segmorph, gpu'], ['morph', input.segmorph, 'segmorph, morph'],
+                                      ['gltfpack', input.gltfpack, 'gltfpack']]) {
+      const m = p[mode];
+      print(`| ${input.label} | ${name} | ${(file.brotli / 1000).toFixed(1)} kB | ${mb(m.allocated)} | ` +
+            `${(m.allocated / p.gpu.allocated).toFixed(1)}x | ${ms(m.first)} ms | ${ms(m.cpu)} ms | ${ms(m.frame)} ms | ` +
+            `${Math.round(m.uploaded).toLocaleString('en')} B |`);
+    }
+  }
+  const t = gpu.torus;
+  if (t?.failed) flags.push(`gpu, torus: ${t.failed}`);
+  else if (t?.playback) {
+    const g = t.playback.gpu;
+    print(`| torus ${t.vertices.toLocaleString('en')} x ${t.frames} | segmorph, gpu | ${(t.bytes / 1000).toFixed(1)} kB raw | ` +
+          `${mb(g.allocated)} | 1.0x | ${ms(g.first)} ms | ${ms(g.cpu)} ms | ${ms(g.frame)} ms | ` +
+          `${Math.round(g.uploaded).toLocaleString('en')} B |`);
+    print(`| torus ${t.vertices.toLocaleString('en')} x ${t.frames} | morph targets | | ${mb(t.morph_bytes_computed)} ` +
+          `(computed as three.js stores them, V x F x ${t.normals ? 32 : 16} B: not loaded) | ` +
+          `${(t.morph_bytes_computed / g.allocated).toFixed(1)}x | | | | |`);
+  }
+  print();
+}
+
 // Log-log slope of `y` against `x` between two points: the exponent of the growth.
 const exponent = (a, b, x, y) => Math.log(y(b) / y(a)) / Math.log(x(b) / x(a));
 
@@ -601,7 +647,8 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   charts.link = (name) => path.relative(path.dirname(doc), path.join(chartDir, name)).split(path.sep).join('/');
   const lines = [], flags = [];
   const print = (line = '') => lines.push(line);
-  const anyMeta = parts.rd?.meta || parts.speed?.meta || parts.scaling?.meta || parts.large?.meta || parts.browser?.meta;
+  const anyMeta = parts.rd?.meta || parts.speed?.meta || parts.scaling?.meta || parts.large?.meta || parts.browser?.meta ||
+                  parts.gpu?.meta;
   print('# Benchmarks');
   print();
   print(quick ? 'The quick mode of the harness (the test suite runs it): one file, two segmorph rates, one setting per ' +
@@ -621,8 +668,8 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   print('```');
   print();
   print('It writes every file and log under `out/bench/` (`results/*.json` hold the figures), then this page and ' +
-        '`docs/bench/*.svg`. `--parts rd,speed,scaling,large,browser` runs some parts only (the page is rebuilt from the ' +
-        'saved results of all five); `--quick` is the test suite\'s small run (ctest `bench_quick`). Exit status 1 when a step fails ' +
+        '`docs/bench/*.svg`. `--parts rd,speed,scaling,large,browser,gpu` runs some parts only (the page is rebuilt from the ' +
+        'saved results of all six); `--quick` is the test suite\'s small run (ctest `bench_quick`). Exit status 1 when a step fails ' +
         'or a segmorph file misses its error bound.');
   print();
   if (anyMeta) {
@@ -633,7 +680,8 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
     // Each part names the revision it ran: the parts are saved, and can be run at different times.
     print(`- ${anyMeta.versions.join('; ')}.`);
     for (const [name, key] of [['Rate and distortion', 'rd'], ['Speed and memory', 'speed'], ['Scaling', 'scaling'],
-                               ['Large skinned files', 'large'], ['In the browser', 'browser']])
+                               ['Large skinned files', 'large'], ['In the browser', 'browser'],
+                               ['Playing on the GPU', 'gpu']])
       if (parts[key]) print(metaLine(name, parts[key].meta));
     print();
   }
@@ -644,6 +692,7 @@ export function writeReport({ parts, doc, chartDir, command, quick }) {
   if (parts.scaling) scalingPart(parts.scaling, charts, lines, flags);
   if (parts.large) largePart(parts.large, lines, flags);
   if (parts.browser) browserPart(parts.browser, lines, flags);
+  if (parts.gpu) gpuPart(parts.gpu, lines, flags);
   print('## Flags');
   print();
   print('Failed steps and segmorph files above their error bound (the harness exits with 1 when there is one).');
