@@ -627,6 +627,18 @@ function summary(parts, lines) {
     print(`- In Chromium, the first played frame over a ${rate} Mbit/s link (brotli bytes / rate + load): ` +
           web.map((i) => `${path.basename(i.label)} ${at(i.segmorph).toFixed(2)} s (gltfpack ${at(i.gltfpack).toFixed(2)} s)`).join(', ') + '.');
   }
+  const gpu = parts.gpu;
+  const played = (gpu?.inputs ?? []).filter((i) => i.playback);
+  if (played.length) {
+    const megabytes = (bytes) => (bytes / 1e6).toFixed(2);
+    const torus = gpu.torus?.playback
+      ? `; a ${gpu.torus.vertices.toLocaleString('en')} × ${gpu.torus.frames} cache ${megabytes(gpu.torus.playback.gpu.allocated)} MB ` +
+        `(its morph targets would take ${megabytes(gpu.torus.morph_bytes_computed)} MB)` : '';
+    print('- GPU bytes to play a sequence, the model on the GPU / its frames as morph targets / gltfpack\'s file: ' +
+          played.map((i) => `${path.basename(i.label)} ${megabytes(i.playback.gpu.allocated)} / ` +
+                            `${megabytes(i.playback.morph.allocated)} / ${megabytes(i.playback.gltfpack.allocated)} MB`).join(', ') +
+          `${torus}.`);
+  }
   const scaling = parts.scaling?.result;
   if (scaling && !scaling.failed && scaling.byVertices.length > 1) {
     const [a, z] = [scaling.byVertices[0], scaling.byVertices[scaling.byVertices.length - 1]];
