@@ -2,8 +2,8 @@
 // Serves the web package for the viewer and the browser tests, on 127.0.0.1 only:
 //   node web/serve.mjs [--port N] [--web DIR] [--three DIR] [--root PREFIX=DIR ...]
 // / is the built package (DIR, default build/web: the .wasm, the JS modules, the viewer at /viewer/), /vendor/three/ the three
-// package (default tests/js/node_modules/three, installed by .ci/setup), and each --root PREFIX=DIR one more folder
-// (tests serve their pages and files so). Prints the address; Ctrl-C stops it.
+// package (default tests/js/node_modules/three, installed by .ci/setup), /vendor/@babylonjs/ Babylon.js's ES module packages
+// (tests/js/node_modules/@babylonjs), and each --root PREFIX=DIR one more folder (tests serve their pages and files so). Prints the address; Ctrl-C stops it.
 import { createServer } from 'node:http';
 import { createReadStream, existsSync, statSync } from 'node:fs';
 import path from 'node:path';
@@ -15,8 +15,9 @@ const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/ja
                 '.bin': 'application/octet-stream', '.png': 'image/png', '.jpg': 'image/jpeg', '.css': 'text/css' };
 
 export function serve({ port = 0, web = path.join(here, '..', 'build', 'web'),
-                        three = path.join(here, '..', 'tests', 'js', 'node_modules', 'three'), roots = {} } = {}) {
-  const mounts = [...Object.entries(roots), ['/vendor/three/', three], ['/', web]]
+                        three = path.join(here, '..', 'tests', 'js', 'node_modules', 'three'),
+                        babylon = path.join(here, '..', 'tests', 'js', 'node_modules', '@babylonjs'), roots = {} } = {}) {
+  const mounts = [...Object.entries(roots), ['/vendor/three/', three], ['/vendor/@babylonjs/', babylon], ['/', web]]
     .map(([prefix, directory]) => [prefix.endsWith('/') ? prefix : `${prefix}/`, path.resolve(directory)]);
   const server = createServer((request, response) => {
     const url = decodeURIComponent(new URL(request.url, 'http://localhost').pathname);

@@ -20,3 +20,16 @@ export function inputsUnder(directory) {
   return readdirSync(directory, { withFileTypes: true }).filter((e) => e.isDirectory()).flatMap((e) =>
     readdirSync(path.join(directory, e.name)).filter((f) => /\.(glb|gltf)$/.test(f)).map((f) => path.join(directory, e.name, f)));
 }
+
+// A new page of `browser` at `url`, once the page has set window.ready; its console errors and uncaught exceptions
+// are collected in consoleErrors.
+export async function openTestPage(browser, url) {
+  const page = await browser.newPage();
+  page.setDefaultTimeout(300000);
+  const consoleErrors = [];
+  page.on('console', (message) => { if (message.type() === 'error') consoleErrors.push(message.text()); });
+  page.on('pageerror', (error) => consoleErrors.push(error.message));
+  await page.goto(url);
+  await page.waitForFunction(() => window.ready === true, null, { timeout: 120000 });
+  return { page, consoleErrors };
+}

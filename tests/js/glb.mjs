@@ -1,5 +1,6 @@
 // Reading and writing glTF containers in Node, shared by the scripts of tests/js.
 
+import { writeFileSync } from 'node:fs';
 import { readFile } from 'node:fs/promises';
 import path from 'node:path';
 
@@ -72,4 +73,19 @@ export function glbBytes(json, bin) {
     glb.set(bin, binStart + 8);
   }
   return glb;
+}
+
+// Two hostile copies of `asset` (readAsset's), written as DIRECTORY/damaged.glb and DIRECTORY/truncated.glb: the
+// SEGMORPH_animation_compression stream of its first compressed primitive with its second half zeroed, and with its
+// bufferView cut to half its length.
+export function writeHostileStreams(asset, directory) {
+  const primitive = asset.json.meshes.flatMap((m) => m.primitives).find((p) => p.extensions?.SEGMORPH_animation_compression);
+  const index = primitive.extensions.SEGMORPH_animation_compression.bufferView, view = asset.json.bufferViews[index];
+  const start = view.byteOffset ?? 0, buffer = asset.buffers[view.buffer ?? 0];
+  const zeroed = Buffer.from(buffer);
+  zeroed.fill(0, start + Math.floor(view.byteLength / 2), start + view.byteLength);
+  writeFileSync(path.join(directory, 'damaged.glb'), glbBytes(asset.json, zeroed));
+  const cut = structuredClone(asset.json);
+  cut.bufferViews[index].byteLength = Math.floor(view.byteLength / 2);
+  writeFileSync(path.join(directory, 'truncated.glb'), glbBytes(cut, buffer));
 }

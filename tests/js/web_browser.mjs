@@ -13,12 +13,12 @@
 //
 //   node tests/js/web_browser.mjs SEGMORPH WEB_DIR WORK_DIR SAMPLES_DIR SHARED_SAMPLES_DIR
 import { execFileSync } from 'node:child_process';
-import { existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, rmSync } from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { inputsUnder, launchChromium } from './chromium.mjs';
-import { glbBytes, readAsset } from './glb.mjs';
+import { inputsUnder, launchChromium, openTestPage } from './chromium.mjs';
+import { readAsset, writeHostileStreams } from './glb.mjs';
 import { serve } from '../../web/serve.mjs';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
@@ -55,27 +55,13 @@ for (const input of inputs) {
 }
 
 // Damaged files: the cube's stream with its second half zeroed, and with its bufferView cut short.
-const cube = await readAsset(path.join(work, 'AnimatedMorphCube.default.glb'));
-const streamView = cube.json.bufferViews[cube.json.meshes[0].primitives[0].extensions.SEGMORPH_animation_compression.bufferView];
-const zeroed = Buffer.from(cube.buffers[0]);
-zeroed.fill(0, (streamView.byteOffset ?? 0) + streamView.byteLength / 2, (streamView.byteOffset ?? 0) + streamView.byteLength);
-writeFileSync(path.join(work, 'damaged.glb'), glbBytes(cube.json, zeroed));
-const cut = structuredClone(cube.json);
-cut.bufferViews[cube.json.meshes[0].primitives[0].extensions.SEGMORPH_animation_compression.bufferView].byteLength =
-  Math.floor(streamView.byteLength / 2);
-writeFileSync(path.join(work, 'truncated.glb'), glbBytes(cut, cube.buffers[0]));
+writeHostileStreams(await readAsset(path.join(work, 'AnimatedMorphCube.default.glb')), work);
 
 const server = await serve({ web: webDir, roots: { '/pages/': path.join(here, 'web_pages'), '/files/': work } });
 const origin = `http://127.0.0.1:${server.address().port}`;
 const browser = await launchChromium();
 try {
-  const page = await browser.newPage();
-  page.setDefaultTimeout(120000);
-  const consoleErrors = [];
-  page.on('console', (message) => { if (message.type() === 'error') consoleErrors.push(message.text()); });
-  page.on('pageerror', (error) => consoleErrors.push(error.message));
-  await page.goto(`${origin}/pages/compare.html`);
-  await page.waitForFunction(() => window.ready === true, null, { timeout: 60000 });
+  const { page, consoleErrors } = await openTestPage(browser, `${origin}/pages/compare.html`);
 
   // 1. Every case, and the cow (or the first clip file) streamed and in workers.
   // Morph targets (GPU playback, the default, is tested in web_gpu.mjs: its positions are not on the CPU).

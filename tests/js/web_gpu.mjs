@@ -14,12 +14,12 @@
 //
 //   node tests/js/web_gpu.mjs SEGMORPH WEB_DIR WORK_DIR SAMPLES_DIR SHARED_SAMPLES_DIR
 import { execFileSync } from 'node:child_process';
-import { existsSync, mkdirSync, rmSync, writeFileSync } from 'node:fs';
+import { existsSync, mkdirSync, rmSync } from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
-import { inputsUnder, launchChromium } from './chromium.mjs';
-import { glbBytes, readAsset } from './glb.mjs';
+import { inputsUnder, launchChromium, openTestPage } from './chromium.mjs';
+import { readAsset, writeHostileStreams } from './glb.mjs';
 import { serve } from '../../web/serve.mjs';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
@@ -74,30 +74,14 @@ for (const input of inputs) {
 
 // Hostile files: a version-4 stream with its second half zeroed, and cut short.
 const victim = cases.find((c) => c.label.startsWith('flag gpu-bake')) ?? cases.find((c) => c.versions.some((v) => v.version === 4));
-{
-  const asset = victim.asset;
-  const primitive = asset.json.meshes.flatMap((m) => m.primitives).find((p) => p.extensions?.SEGMORPH_animation_compression);
-  const view = asset.json.bufferViews[primitive.extensions.SEGMORPH_animation_compression.bufferView];
-  const zeroed = Buffer.from(asset.buffers[0]);
-  zeroed.fill(0, (view.byteOffset ?? 0) + Math.floor(view.byteLength / 2), (view.byteOffset ?? 0) + view.byteLength);
-  writeFileSync(path.join(work, 'damaged.glb'), glbBytes(asset.json, zeroed));
-  const cut = structuredClone(asset.json);
-  cut.bufferViews[primitive.extensions.SEGMORPH_animation_compression.bufferView].byteLength = Math.floor(view.byteLength / 2);
-  writeFileSync(path.join(work, 'truncated.glb'), glbBytes(cut, asset.buffers[0]));
-}
+writeHostileStreams(victim.asset, work);
 
 const server = await serve({ web: webDir, roots: { '/pages/': path.join(here, 'web_pages'), '/files/': work } });
 const origin = `http://127.0.0.1:${server.address().port}`;
 const browser = await launchChromium();
 const megabytes = (bytes) => `${(bytes / 1e6).toFixed(2)} MB`;
 try {
-  const page = await browser.newPage();
-  page.setDefaultTimeout(300000);
-  const consoleErrors = [];
-  page.on('console', (message) => { if (message.type() === 'error') consoleErrors.push(message.text()); });
-  page.on('pageerror', (error) => consoleErrors.push(error.message));
-  await page.goto(`${origin}/pages/gpu.html`);
-  await page.waitForFunction(() => window.ready === true, null, { timeout: 60000 });
+  const { page, consoleErrors } = await openTestPage(browser, `${origin}/pages/gpu.html`);
 
   for (const c of cases) {
     try {

@@ -31,10 +31,10 @@ import {
   RGBFormat, Scene, ShaderMaterial, Sphere, Vector3, WebGLRenderTarget,
 } from 'three';
 
+import { NAME, checkClips, trackLayout } from '../gltf_extension.js';
 import { SegmorphDecoder } from '../segmorph_decoder.js';
+import { SurfaceNormals } from '../surface_normals.js';
 
-const NAME = 'SEGMORPH_animation_compression';
-const PATHS = { translation: 0, rotation: 1, scale: 2 };
 
 export class GLTFSegmorphExtension {
   // options: playback (default 'gpu'): how a clip primitive plays: 'gpu' evaluates a version-4 stream's model in the
@@ -174,7 +174,7 @@ export class GLTFSegmorphExtension {
         if (!error.unsupported) throw error;  // damaged: reject; versions 1-3: morph targets below
       }
       if (model) {
-        checkClips(model.clipFrames, extension, times, what);
+        checkClips(model.clipFrames, extension, times.map((t) => t.count), what);
         this.playbacks.push({ what, mode: 'gpu', version: model.version });
         const player = new GpuPlayback(model, geometry, meshes, this.options.normals);
         extension.clips.forEach((clip, c) => {
@@ -184,7 +184,7 @@ export class GLTFSegmorphExtension {
       }
     }
     const decoded = await this._timed(what, () => SegmorphDecoder.decodeStreamAsync(stream, positions, indices));
-    checkClips(decoded.clips.map((c) => c.frameCount), extension, times, what);
+    checkClips(decoded.clips.map((c) => c.frameCount), extension, times.map((t) => t.count), what);
     this.playbacks.push({ what, mode: 'morph', version: decoded.version });
     // Every frame an absolute target: at weight 1 on one target the position is that frame exactly.
     const floats = positions.length, targets = [], normalTargets = [];
@@ -222,42 +222,11 @@ export class GLTFSegmorphExtension {
   async _streaming(meshes, extension, animations, stream, positions, indices, times, what) {
     const player = await this._timed(what, () =>
       new StreamingPlayback(stream, positions, indices, extension, times, meshes, this.options.normals));
-    checkClips(player.frameCounts, extension, times, what);
+    checkClips(player.frameCounts, extension, times.map((t) => t.count), what);
     extension.clips.forEach((clip, c) => {
       for (const mesh of meshes) for (const track of player.tracks(mesh, c)) addTrack(animations, clip.animation, track, what);
     });
   }
-}
-
-// The layout of an animation's track stream (spec/README.md, "Coded tracks"): the distinct input accessors of its coded
-// samplers in first-named order, and per sampler its time array, path and component count.
-function trackLayout(json, animation, coded, what) {
-  const timeAccessors = [], samplers = [];
-  for (const s of coded.samplers) {
-    const sampler = animation.samplers[s];
-    if (!sampler) throw new Error(`${what}: coded sampler ${s} does not exist`);
-    const paths = new Set(animation.channels.filter((c) => c.sampler === s).map((c) => c.target.path));
-    const path = paths.size === 1 ? PATHS[[...paths][0]] : undefined;
-    if (path === undefined) throw new Error(`${what}: coded sampler ${s} must move translations, rotations or scales alone`);
-    const input = json.accessors[sampler.input], output = json.accessors[sampler.output];
-    const components = path === 1 ? 4 : 3;
-    if (!input || !output || input.bufferView !== undefined || output.bufferView !== undefined ||
-        output.count !== input.count || output.type !== (components === 4 ? 'VEC4' : 'VEC3'))
-      throw new Error(`${what}: coded sampler ${s} needs FLOAT accessors without data that agree with its path`);
-    let times = timeAccessors.indexOf(sampler.input);
-    if (times < 0) times = timeAccessors.push(sampler.input) - 1;
-    samplers.push({ times, path, components });
-  }
-  return { timeAccessors, samplers };
-}
-
-function checkClips(frameCounts, extension, times, what) {
-  if (frameCounts.length !== extension.clips.length)
-    throw new Error(`${what}: the stream has ${frameCounts.length} clips, the extension names ${extension.clips.length}`);
-  frameCounts.forEach((count, c) => {
-    if (times[c].count !== count)
-      throw new Error(`${what}: clip ${c} has ${count} frames in the stream and ${times[c].count} times`);
-  });
 }
 
 function addTrack(animations, index, track, what) {
@@ -265,64 +234,6 @@ function addTrack(animations, index, track, what) {
   if (!clip) throw new Error(`${what}: a clip names animation ${index}, which does not exist`);
   clip.tracks.push(track);
   clip.resetDuration();
-}
-
-// Normals that turn with the surface (spec/README.md, "Normals and tangents", as segmorph decode does): each vertex's
-// normal in the base mesh is turned by the smallest rotation taking the area-weighted normal of the surface around it
-// in the base to the one in the frame; vertices at the same base position (seams) share that surface.
-class SurfaceNormals {
-  constructor(positions, indices, normals) {
-    const count = positions.length / 3, keys = new Map();
-    this.point = new Uint32Array(count);  // the surface point (welded vertex) of each vertex
-    for (let v = 0; v < count; ++v) {
-      const key = `${positions[v * 3]},${positions[v * 3 + 1]},${positions[v * 3 + 2]}`;
-      if (!keys.has(key)) keys.set(key, keys.size);
-      this.point[v] = keys.get(key);
-    }
-    this.points = keys.size;
-    this.indices = indices;
-    this.normals = normals;
-    this.base = this._surface(positions);
-  }
-
-  _surface(positions) {
-    const sum = new Float64Array(this.points * 3), index = this.indices;
-    for (let t = 0; t + 2 < index.length; t += 3) {
-      const a = index[t] * 3, b = index[t + 1] * 3, c = index[t + 2] * 3;
-      const ux = positions[b] - positions[a], uy = positions[b + 1] - positions[a + 1], uz = positions[b + 2] - positions[a + 2];
-      const vx = positions[c] - positions[a], vy = positions[c + 1] - positions[a + 1], vz = positions[c + 2] - positions[a + 2];
-      const nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;  // twice the area, outward
-      for (const corner of [index[t], index[t + 1], index[t + 2]]) {
-        const p = this.point[corner] * 3;
-        sum[p] += nx, sum[p + 1] += ny, sum[p + 2] += nz;
-      }
-    }
-    for (let p = 0; p < sum.length; p += 3) {
-      const length = Math.hypot(sum[p], sum[p + 1], sum[p + 2]);
-      if (length > 0) sum[p] /= length, sum[p + 1] /= length, sum[p + 2] /= length;
-    }
-    return sum;
-  }
-
-  // The base normals turned to `frame` (V × 3 positions): a new Float32Array.
-  turned(frame) {
-    const now = this._surface(frame), out = new Float32Array(this.normals.length);
-    for (let v = 0; v < this.point.length; ++v) {
-      const p = this.point[v] * 3;
-      const ax = this.base[p], ay = this.base[p + 1], az = this.base[p + 2];
-      const bx = now[p], by = now[p + 1], bz = now[p + 2];
-      let nx = this.normals[v * 3], ny = this.normals[v * 3 + 1], nz = this.normals[v * 3 + 2];
-      // Rodrigues: the rotation taking a to b, about a × b by the angle between them.
-      const cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx, cos = ax * bx + ay * by + az * bz;
-      if (cos > -0.999999) {
-        const k = 1 / (1 + cos), dot = cx * nx + cy * ny + cz * nz;
-        const wx = cy * nz - cz * ny, wy = cz * nx - cx * nz, wz = cx * ny - cy * nx;
-        nx = nx * cos + wx + cx * dot * k, ny = ny * cos + wy + cy * dot * k, nz = nz * cos + wz + cz * dot * k;
-      }
-      out[v * 3] = nx, out[v * 3 + 1] = ny, out[v * 3 + 2] = nz;
-    }
-    return out;
-  }
 }
 
 // Streaming playback of a clip primitive: the stream stays compressed in the decoder's memory and only the shown frame
