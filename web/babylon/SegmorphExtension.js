@@ -8,31 +8,47 @@
 //
 // The base meshes are KHR_draco_mesh_compression: point Babylon's DracoDecoder.DefaultConfiguration at local copies
 // of the Draco decoder (docs/web.md). Options, per load, through the loader's extension options:
-//   { pluginOptions: { gltf: { extensionOptions: { SEGMORPH_animation_compression: { normals: true } } } } }
-// normals (default true): turn the normals with the surface in every frame or target, as segmorph decode does.
+//   { pluginOptions: { gltf: { extensionOptions: { SEGMORPH_animation_compression: { playback: 'gpu' } } } } }
+// playback (default 'gpu'): 'gpu' plays a version-4 stream of clips from its model on the GPU (other versions play as
+// 'morph'), 'morph' makes every frame a morph target; normals (default true): turn the normals with the surface in
+// every frame or target, as segmorph decode does.
 //
 // What it does with each part of the extension (docs/web.md, "Babylon.js"):
 // - coded tracks (an animation's translation, rotation and scale samplers in a track stream): decoded when the loader
 //   starts, and served as the data of their accessors, so that the loader builds ordinary Animations from them;
 // - a primitive that keeps its morph targets: the targets' positions (and normals) are filled in from the stream;
 //   the node's weights animation plays them as usual;
-// - a primitive that plays clips: its stream is decoded against the Draco base mesh; every frame of every clip becomes
+// - a primitive that plays clips, on the GPU (the default, for version-4 streams): the stream's model is uploaded as
+//   float textures and evaluated per vertex into a shape texture whenever the shown parameters change; the mesh's
+//   cloned materials take positions and turned normals from it (GpuPlayback below); the AnimationGroups animate one
+//   influence per frame as with morph targets, and the parameters are blended by them;
+// - a primitive that plays clips as morph targets: its stream is decoded against the Draco base mesh; every frame of every clip becomes
 //   a MorphTarget of a MorphTargetManager (Babylon's targets hold absolute positions, so at influence 1 on one target
 //   the mesh shows that frame exactly), the mesh's POSITION becomes frame 0 of clip 0 (what it shows when no clip
 //   plays), and the AnimationGroup of the glTF animation each clip names gets an Animation of every target's influence,
 //   as a glTF weights channel would: a frame of the clip is 1 at its time and 0 at its neighbours' (LINEAR or STEP as
 //   the clip says), the other clips' frames stay 0;
 // - placeholder channels play a constant; they stay.
-// Each clip primitive's mesh says how it plays in mesh.metadata.segmorph ({ mode: 'morph', version }).
+// Each clip primitive's mesh says how it plays in mesh.metadata.segmorph ({ mode: 'gpu' | 'morph', version }, and the
+// GpuPlayback as player on the GPU).
 // A damaged or mismatched stream makes the load fail with an Error that names the mesh, primitive or animation.
 import { Animation } from '@babylonjs/core/Animations/animation.js';
 import { VertexBuffer } from '@babylonjs/core/Buffers/buffer.js';
+import { BoundingInfo } from '@babylonjs/core/Culling/boundingInfo.js';
+import { Constants } from '@babylonjs/core/Engines/constants.js';
+import { EffectRenderer, EffectWrapper } from '@babylonjs/core/Materials/effectRenderer.js';
+import { MaterialPluginBase } from '@babylonjs/core/Materials/materialPluginBase.js';
+import { ShadowDepthWrapper } from '@babylonjs/core/Materials/shadowDepthWrapper.js';
+import { RawTexture } from '@babylonjs/core/Materials/Textures/rawTexture.js';
+import { RenderTargetTexture } from '@babylonjs/core/Materials/Textures/renderTargetTexture.js';
+import { Vector3 } from '@babylonjs/core/Maths/math.vector.js';
 import { MorphTarget } from '@babylonjs/core/Morph/morphTarget.js';
 import { MorphTargetManager } from '@babylonjs/core/Morph/morphTargetManager.js';
 import { registerGLTFExtension, unregisterGLTFExtension } from '@babylonjs/loaders/glTF/2.0/glTFLoaderExtensionRegistry.js';
 
 import { NAME, checkClips, trackLayout } from '../gltf_extension.js';
 import { SegmorphDecoder } from '../segmorph_decoder.js';
+import { MODEL_GLSL, blendParameters, surfaceRings, textureWidth } from '../model_playback.js';
 import { SurfaceNormals } from '../surface_normals.js';
 
 export { SegmorphDecoder };
@@ -46,8 +62,10 @@ export class SegmorphExtension {
     this.enabled = true;
     this.order = 50;  // before the loader's own handling of anything it serves
     this._loader = loader;
-    this.options = { normals: true, ...options };
-    this.playbacks = [];  // per clip primitive: { what, mode: 'morph', version }
+    this.options = { normals: true, playback: 'gpu', ...options };
+    if (!['gpu', 'morph'].includes(this.options.playback))
+      throw new Error(`${NAME}: playback must be 'gpu' or 'morph', not '${this.options.playback}'`);
+    this.playbacks = [];  // per clip primitive: { what, mode: 'gpu' | 'morph', version }
     this.views = new Map();  // synthetic bufferView → its decoded bytes (coded tracks)
     this.decodeMilliseconds = 0;  // time spent in the decoder
   }
@@ -62,7 +80,7 @@ export class SegmorphExtension {
     try {
       return await decode();
     } catch (error) {
-      throw new Error(`${what}: ${error.message}`);
+      throw Object.assign(new Error(`${what}: ${error.message}`), { unsupported: error.unsupported === true });
     } finally {
       this.decodeMilliseconds += performance.now() - started;
     }
@@ -157,6 +175,23 @@ export class SegmorphExtension {
       if (!accessor) throw new Error(`${what}: clip ${c} names accessor ${clip.times}, which does not exist`);
       return this._loader._loadFloatAccessorAsync(`/accessors/${clip.times}`, accessor);
     }));
+    if (this.options.playback === 'gpu') {
+      let model = null;
+      try {
+        model = await this._timed(what, () => SegmorphDecoder.decodeModelAsync(stream, positions, indices));
+      } catch (error) {
+        if (!error.unsupported) throw error;  // damaged: reject; versions 1-3: morph targets below
+      }
+      if (model) {
+        checkClips(model.clipFrames, extension, times.map((t) => t.length), what);
+        this.playbacks.push({ what, mode: 'gpu', version: model.version });
+        const normals = this.options.normals && mesh.getVerticesData(VertexBuffer.NormalKind) !== null;
+        const player = new GpuPlayback(model, meshes, positions, indices, normals);
+        await player.ready();
+        this._animate(player.targets, extension, times, `${mesh.name}`, what);
+        return;
+      }
+    }
     const decoded = await this._timed(what, () => SegmorphDecoder.decodeStreamAsync(stream, positions, indices));
     checkClips(decoded.clips.map((c) => c.frameCount), extension, times.map((t) => t.length), what);
     this.playbacks.push({ what, mode: 'morph', version: decoded.version });
@@ -185,9 +220,14 @@ export class SegmorphExtension {
       m.morphTargetManager = manager;
       m.metadata = { ...m.metadata, segmorph: playback };
     }
-    // Each clip: its animation's group animates every target, as a glTF weights channel does: its own frames' one
-    // hot at their times, the other clips' frames held at 0.
-    const fps = this._loader.parent.targetFps;
+    this._animate(targets, extension, times, mesh.name, what);
+    for (const m of meshes) m.refreshBoundingInfo({ applyMorph: false });
+  }
+
+  // Each clip: its animation's group animates every target (an object with an influence per frame of the stream), as
+  // a glTF weights channel does: its own frames one-hot at their times, the other clips' frames held at 0.
+  _animate(targets, extension, times, name, what) {
+    const gltf = this._loader.gltf, fps = this._loader.parent.targetFps;
     let first = 0;
     extension.clips.forEach((clip, c) => {
       const group = gltf.animations?.[clip.animation]?._babylonAnimationGroup;
@@ -196,13 +236,255 @@ export class SegmorphExtension {
       const zero = [{ frame: keys[0] * fps, value: 0 }, { frame: keys[last] * fps, value: 0 }];
       targets.forEach((target, t) => {
         const f = t - first;
-        const animation = new Animation(`${mesh.name} clip ${c} target ${t}`, 'influence', fps, Animation.ANIMATIONTYPE_FLOAT);
+        const animation = new Animation(`${name} clip ${c} target ${t}`, 'influence', fps, Animation.ANIMATIONTYPE_FLOAT);
         animation.setKeys(f >= 0 && f <= last ? oneHotKeys(keys, f, fps, step) : zero);
         group.addTargetedAnimation(animation, target);
       });
       first += keys.length;
     });
-    for (const m of meshes) m.refreshBoundingInfo({ applyMorph: false });
+  }
+}
+
+// The model's evaluation per vertex (docs/runtime.md, "Playing the model"; MODEL_GLSL's segmorphEvaluate, the C API's
+// float32 arithmetic and order), in a fragment shader: texel v of the shape texture is vertex v's position at the shown parameters. Per vertex
+// (textures of the shape's size): its base position and first coefficient vector, its 4 clusters and 4 weights;
+// segmorphParameters holds cluster k's [A | t] rows at texels 3k .. 3k + 2, then the basis values 4 to a texel;
+// segmorphClusters row k its centroid and (first basis value, m_k); segmorphCoefficients the coefficient vectors.
+const SHAPE_GLSL = `
+precision highp float;
+precision highp int;
+uniform highp sampler2D segmorphVertices;
+uniform highp sampler2D segmorphVertexClusters;
+uniform highp sampler2D segmorphVertexWeights;
+uniform highp sampler2D segmorphParameters;
+uniform highp sampler2D segmorphClusters;
+uniform highp sampler2D segmorphCoefficients;
+uniform int segmorphCount;
+
+${MODEL_GLSL}
+void main(void) {
+  ivec2 at = ivec2(gl_FragCoord.xy);
+  int v = at.y * textureSize(segmorphVertices, 0).x + at.x;
+  if (v >= segmorphCount) { gl_FragColor = vec4(0.0); return; }
+  vec4 vertex = texelFetch(segmorphVertices, at, 0);
+  ivec4 clusters = ivec4(texelFetch(segmorphVertexClusters, at, 0));
+  gl_FragColor = vec4(segmorphEvaluate(vertex.xyz, clusters, texelFetch(segmorphVertexWeights, at, 0), int(vertex.w)), 1.0);
+}
+`;
+
+// What the mesh's material does with the shape texture (SegmorphPlugin): the vertex's position is texel gl_VertexID;
+// with normals, the base normal turned by the smallest rotation taking the base surface normal around the vertex's
+// point (segmorphSurface) to today's, summed over the same triangles (segmorphRing: the first and the count of its
+// entries in segmorphTriangles, each a triangle's three vertices), as segmorph decode turns them.
+const VERTEX_DEFINITIONS = `
+uniform highp sampler2D segmorphShape;
+uniform highp sampler2D segmorphTriangles;
+#ifdef SEGMORPH_NORMALS
+attribute vec3 segmorphSurface;
+attribute vec2 segmorphRing;
+#endif
+vec4 segmorphTexel(highp sampler2D map, int i) {
+  int width = textureSize(map, 0).x;
+  return texelFetch(map, ivec2(i % width, i / width), 0);
+}
+#ifdef SEGMORPH_NORMALS
+vec3 segmorphNormal(vec3 n) {
+  vec3 now = vec3(0.0);
+  int first = int(segmorphRing.x), count = int(segmorphRing.y);
+  for (int i = 0; i < count; ++i) {
+    ivec3 t = ivec3(segmorphTexel(segmorphTriangles, first + i).xyz);
+    vec3 a = segmorphTexel(segmorphShape, t.x).xyz;
+    now += cross(segmorphTexel(segmorphShape, t.y).xyz - a, segmorphTexel(segmorphShape, t.z).xyz - a);
+  }
+  float size = length(now);
+  if (size > 0.0) now /= size;
+  vec3 c = cross(segmorphSurface, now);
+  float cosine = dot(segmorphSurface, now);
+  if (cosine > -0.999999) n = n * cosine + cross(c, n) + c * (dot(c, n) / (1.0 + cosine));
+  return n;
+}
+#endif
+`;
+
+// A material evaluating a GpuPlayback's shape: the plugin of each clone of the meshes' materials.
+class SegmorphPlugin extends MaterialPluginBase {
+  constructor(material, player, normals) {
+    super(material, 'Segmorph', 300, { SEGMORPH: false, SEGMORPH_NORMALS: false });
+    this._player = player;
+    this._normals = normals;
+    this._enable(true);
+  }
+
+  getClassName() {
+    return 'SegmorphPlugin';
+  }
+
+  isCompatible(shaderLanguage) {
+    return shaderLanguage === 0;  // GLSL (WebGL 2)
+  }
+
+  prepareDefines(defines) {
+    defines.SEGMORPH = true;
+    defines.SEGMORPH_NORMALS = this._normals;
+  }
+
+  getSamplers(samplers) {
+    samplers.push('segmorphShape', 'segmorphTriangles');
+  }
+
+  getAttributes(attributes) {
+    if (this._normals) attributes.push('segmorphSurface', 'segmorphRing');
+  }
+
+  getUniforms() {
+    return { ubo: [] };
+  }
+
+  bindForSubMesh(uniformBuffer) {
+    uniformBuffer.setTexture('segmorphShape', this._player.shape);
+    uniformBuffer.setTexture('segmorphTriangles', this._player.triangleTexture ?? this._player.shape);
+  }
+
+  getCustomCode(shaderType) {
+    if (shaderType !== 'vertex') return null;
+    return {
+      CUSTOM_VERTEX_DEFINITIONS: VERTEX_DEFINITIONS,
+      CUSTOM_VERTEX_UPDATE_POSITION: 'positionUpdated = segmorphTexel(segmorphShape, gl_VertexID).xyz;',
+      CUSTOM_VERTEX_UPDATE_NORMAL: '#if defined(NORMAL) && defined(SEGMORPH_NORMALS)\nnormalUpdated = segmorphNormal(normalUpdated);\n#endif',
+    };
+  }
+}
+
+// A float RGBA texture of `count` texels from `values` (4 floats a texel, padded with zeros), read by texelFetch.
+function floatTexture(scene, values, count, width = textureWidth(Math.max(count, 1))) {
+  const height = Math.max(1, Math.ceil(Math.max(count, 1) / width)), data = new Float32Array(width * height * 4);
+  data.set(values.subarray(0, Math.min(values.length, data.length)));
+  const texture = new RawTexture(data, width, height, Constants.TEXTUREFORMAT_RGBA, scene, false, false,
+                                 Constants.TEXTURE_NEAREST_SAMPLINGMODE, Constants.TEXTURETYPE_FLOAT);
+  texture.wrapU = texture.wrapV = Constants.TEXTURE_CLAMP_ADDRESSMODE;
+  return texture;
+}
+
+// GPU playback of a clip primitive (the default for version-4 streams): the model's per-vertex data (gathered through
+// its welded map), clusters and coefficients become float textures; `targets` (one { influence } a frame of the
+// stream) are what the animation groups animate. Before the scene is drawn, when their influences changed, the
+// parameters are blended by them (frame f by weight w_f and frame 0 of clip 0 by 1 − Σ w_f, exact because positions
+// are linear in the parameters), uploaded (K × 12 + N floats), and a pass evaluates every vertex into the shape
+// texture (SHAPE_GLSL), from which the meshes' cloned materials (SegmorphPlugin) take positions and turn normals.
+// Their shadows follow through a ShadowDepthWrapper of each material. The bounds are the model's box.
+export class GpuPlayback {
+  constructor(model, meshes, positions, indices, normals) {
+    this.model = model;
+    this.meshes = meshes;
+    const scene = meshes[0].getScene(), engine = scene.getEngine();
+    const { vertexCount: V, clusterCount: K, coefficientCount: C, basisCount: N, frameCount: F } = model;
+    if (V >= 1 << 24 || C >= 1 << 24) throw new Error(`${V} vertices and ${C} coefficient vectors: more than a float indexes exactly`);
+    const width = textureWidth(V), vertices = new Float32Array(V * 4), clusters = new Float32Array(V * 4), weights = new Float32Array(V * 4);
+    for (let v = 0; v < V; ++v) {
+      const w = model.welded[v];
+      vertices.set(positions.subarray(v * 3, v * 3 + 3), v * 4);
+      vertices[v * 4 + 3] = model.coefficientOffsets[w];
+      for (let j = 0; j < 4; ++j) {
+        clusters[v * 4 + j] = model.clusters[w * 4 + j];
+        weights[v * 4 + j] = model.weights[w * 4 + j];
+      }
+    }
+    this.textures = [floatTexture(scene, vertices, V, width), floatTexture(scene, clusters, V, width), floatTexture(scene, weights, V, width)];
+    const clusterData = new Float32Array(K * 8);
+    for (let k = 0; k < K; ++k) {
+      clusterData.set(model.centroids.subarray(k * 3, k * 3 + 3), k * 8);
+      clusterData[k * 8 + 4] = model.bases[k * 2];
+      clusterData[k * 8 + 5] = model.bases[k * 2 + 1];
+    }
+    this.clusterTexture = floatTexture(scene, clusterData, K * 2, 2);
+    const coefficients = new Float32Array(C * 4);
+    for (let i = 0; i < C; ++i) coefficients.set(model.coefficients.subarray(i * 3, i * 3 + 3), i * 4);
+    this.coefficientTexture = floatTexture(scene, coefficients, C);
+    this.parameterCount = K * 3 + Math.ceil(N / 4);
+    this.parameters = new Float32Array(textureWidth(this.parameterCount) ** 2 * 4);
+    this.parameterTexture = floatTexture(scene, this.parameters, this.parameterCount);
+    this.shape = new RenderTargetTexture('segmorph shape', { width, height: Math.ceil(V / width) }, scene, {
+      type: Constants.TEXTURETYPE_FLOAT, format: Constants.TEXTUREFORMAT_RGBA, generateMipMaps: false,
+      generateDepthBuffer: false, samplingMode: Constants.TEXTURE_NEAREST_SAMPLINGMODE });
+    this.renderer = new EffectRenderer(engine);
+    this.pass = new EffectWrapper({
+      engine, name: 'segmorph shape', fragmentShader: SHAPE_GLSL, uniformNames: ['segmorphCount'],
+      samplerNames: ['segmorphVertices', 'segmorphVertexClusters', 'segmorphVertexWeights', 'segmorphParameters',
+                     'segmorphClusters', 'segmorphCoefficients'],
+    });
+    this.pass.onApplyObservable.add(() => {
+      const effect = this.pass.effect;
+      effect.setTexture('segmorphVertices', this.textures[0]);
+      effect.setTexture('segmorphVertexClusters', this.textures[1]);
+      effect.setTexture('segmorphVertexWeights', this.textures[2]);
+      effect.setTexture('segmorphParameters', this.parameterTexture);
+      effect.setTexture('segmorphClusters', this.clusterTexture);
+      effect.setTexture('segmorphCoefficients', this.coefficientTexture);
+      effect.setInt('segmorphCount', V);
+    });
+    // One animated influence per frame of the stream, as the morph targets' would be.
+    this.targets = Array.from({ length: F }, () => ({ influence: 0 }));
+    this.shown = new Float64Array(F).fill(NaN);
+    if (normals) {
+      const rings = surfaceRings(positions, indices, 4), ring = Float32Array.from(rings.ring);
+      this.triangleTexture = floatTexture(scene, rings.list, rings.entries);
+      for (const mesh of meshes) {
+        mesh.setVerticesData('segmorphSurface', rings.surface, false, 3);
+        mesh.setVerticesData('segmorphRing', ring, false, 2);
+      }
+    }
+    const b = model.bounds;
+    for (const mesh of meshes) {
+      mesh.morphTargetManager = null;
+      const clone = (material) => {
+        const copy = material.clone(`${material.name} (segmorph)`);
+        copy.segmorph = new SegmorphPlugin(copy, this, normals);
+        copy.shadowDepthWrapper = new ShadowDepthWrapper(copy, scene);
+        return copy;
+      };
+      if (mesh.material) mesh.material = clone(mesh.material);
+      mesh.setBoundingInfo(new BoundingInfo(new Vector3(b[0], b[1], b[2]), new Vector3(b[3], b[4], b[5])));
+      mesh.doNotSyncBoundingInfo = true;
+      mesh.metadata = { ...mesh.metadata, segmorph: { mode: 'gpu', version: model.version, player: this } };
+    }
+    this._observer = scene.onBeforeRenderObservable.add(() => this.update());
+    scene.onDisposeObservable.addOnce(() => this.dispose());
+  }
+
+  // Resolves once the pass's shader is compiled; the first shape is then evaluated.
+  async ready() {
+    for (let waited = 0; !this.pass.isReady(); waited += 10) {
+      if (waited > 60000) throw new Error('the GPU playback shader did not compile in 60 s');
+      await new Promise((resolve) => setTimeout(resolve, 10));
+    }
+    this.update();
+  }
+
+  // The parameters at `influences` (one weight per frame), into `out` (blendParameters).
+  blend(influences, out) {
+    return blendParameters(this.model, influences, out);
+  }
+
+  // When the influences changed: the parameters blended and uploaded, the shape evaluated.
+  update() {
+    if (!this.pass.isReady()) return;
+    let changed = false;
+    for (let f = 0; f < this.targets.length; ++f) {
+      const w = this.targets[f].influence;
+      if (this.shown[f] !== w) changed = true, this.shown[f] = w;
+    }
+    if (!changed) return;
+    this.blend(this.shown, this.parameters);
+    this.parameterTexture.update(this.parameters);
+    this.renderer.render(this.pass, this.shape);
+  }
+
+  dispose() {
+    this.meshes[0]?.getScene().onBeforeRenderObservable.remove(this._observer);
+    for (const texture of [...this.textures, this.clusterTexture, this.coefficientTexture, this.parameterTexture, this.shape,
+                           this.triangleTexture]) texture?.dispose();
+    this.pass.dispose();
+    this.renderer.dispose();
   }
 }
 

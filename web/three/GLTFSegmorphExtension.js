@@ -33,6 +33,7 @@ import {
 
 import { NAME, checkClips, trackLayout } from '../gltf_extension.js';
 import { SegmorphDecoder } from '../segmorph_decoder.js';
+import { MODEL_GLSL, blendParameters, surfaceRings, textureWidth } from '../model_playback.js';
 import { SurfaceNormals } from '../surface_normals.js';
 
 
@@ -315,8 +316,8 @@ export class StreamingPlayback {
   }
 }
 
-// The vertex shader's evaluation of a version-4 model (docs/runtime.md, "Playing the model"): the arithmetic of the
-// C API's segmorph_decoder_model_evaluate, in its order. segmorphParameters holds the shown parameters (cluster k's
+// The vertex shader's evaluation of a version-4 model (docs/runtime.md, "Playing the model"): MODEL_GLSL's
+// segmorphEvaluate (the arithmetic of the C API's segmorph_decoder_model_evaluate, in its order) on attributes. segmorphParameters holds the shown parameters (cluster k's
 // [A | t] rows at texels 3k, 3k + 1, 3k + 2, then the basis values, 4 per texel, from texel 3K); segmorphClusters
 // row k its centroid and (first basis value, m_k); segmorphCoefficients the coefficient vectors. Per vertex:
 // segmorphCluster and segmorphWeight its (cluster, weight) pairs, the own cluster first, and segmorphCoefficient the
@@ -329,36 +330,9 @@ in uvec4 segmorphCluster;
 in vec4 segmorphWeight;
 in uint segmorphCoefficient;
 
-vec4 segmorphTexel( highp sampler2D map, int i ) {
-	int width = textureSize( map, 0 ).x;
-	return texelFetch( map, ivec2( i % width, i / width ), 0 );
-}
-
+${MODEL_GLSL}
 vec3 segmorphPosition( vec3 x ) {
-	vec3 p = vec3( 0.0 );
-	for ( int j = 0; j < 4; ++ j ) {
-		float omega = segmorphWeight[ j ];
-		if ( omega == 0.0 ) continue;
-		int k = int( segmorphCluster[ j ] );
-		vec3 d = x - texelFetch( segmorphClusters, ivec2( 0, k ), 0 ).xyz;
-		vec4 r0 = segmorphTexel( segmorphParameters, k * 3 );
-		vec4 r1 = segmorphTexel( segmorphParameters, k * 3 + 1 );
-		vec4 r2 = segmorphTexel( segmorphParameters, k * 3 + 2 );
-		vec3 y = vec3( ( ( r0.x * d.x + r0.y * d.y ) + r0.z * d.z ) + r0.w,
-		               ( ( r1.x * d.x + r1.y * d.y ) + r1.z * d.z ) + r1.w,
-		               ( ( r2.x * d.x + r2.y * d.y ) + r2.z * d.z ) + r2.w );
-		p = p + omega * y;
-	}
-	ivec2 basis = ivec2( texelFetch( segmorphClusters, ivec2( 1, int( segmorphCluster.x ) ), 0 ).xy );
-	int values = 3 * textureSize( segmorphClusters, 0 ).y;
-	int offset = int( segmorphCoefficient );
-	vec3 r = vec3( 0.0 );
-	for ( int i = 0; i < basis.y; ++ i ) {
-		int v = basis.x + i;
-		float b = segmorphTexel( segmorphParameters, values + ( v >> 2 ) )[ v & 3 ];
-		r = r + segmorphTexel( segmorphCoefficients, offset + i ).xyz * b;
-	}
-	return p + r;
+	return segmorphEvaluate( x, ivec4( segmorphCluster ), segmorphWeight, int( segmorphCoefficient ) );
 }
 `;
 
@@ -389,13 +363,6 @@ vec3 segmorphNormal( vec3 n ) {
 }
 `;
 
-// The width of a texture that holds `count` texels in rows: a power of two near the square's side.
-function textureWidth(count) {
-  let width = 1;
-  while (width * width < count) width *= 2;
-  return width;
-}
-
 // A float texture of `count` texels of `channels` floats from `values` (padded with zeros), read by texelFetch.
 function dataTexture(values, count, channels) {
   const width = textureWidth(Math.max(count, 1)), height = Math.max(1, Math.ceil(count / width));
@@ -407,35 +374,6 @@ function dataTexture(values, count, channels) {
   texture.generateMipmaps = false;
   texture.needsUpdate = true;
   return texture;
-}
-
-// The surface around each vertex's point for SEGMORPH_NORMAL_GLSL: per vertex its point's base surface normal and
-// (first, count) of its triangles, and the triangles of every point in a list, as SurfaceNormals sums them.
-function surfaceRings(positions, indices) {
-  const count = positions.length / 3, keys = new Map(), point = new Uint32Array(count);
-  for (let v = 0; v < count; ++v) {
-    const key = `${positions[v * 3]},${positions[v * 3 + 1]},${positions[v * 3 + 2]}`;
-    if (!keys.has(key)) keys.set(key, keys.size);
-    point[v] = keys.get(key);
-  }
-  const points = keys.size, first = new Uint32Array(points + 1);
-  for (let i = 0; i + 2 < indices.length; i += 3) for (let j = 0; j < 3; ++j) first[point[indices[i + j]] + 1] += 1;
-  for (let p = 0; p < points; ++p) first[p + 1] += first[p];
-  const at = first.slice(0, points), list = new Float32Array(first[points] * 3);
-  for (let i = 0; i + 2 < indices.length; i += 3)
-    for (let j = 0; j < 3; ++j) {
-      const e = at[point[indices[i + j]]]++;
-      list[e * 3] = indices[i], list[e * 3 + 1] = indices[i + 1], list[e * 3 + 2] = indices[i + 2];
-    }
-  const base = new SurfaceNormals(positions, indices, new Float32Array(0)).base;
-  const surface = new Float32Array(count * 3), ring = new Uint32Array(count * 2);
-  for (let v = 0; v < count; ++v) {
-    const p = point[v];
-    surface.set(base.subarray(p * 3, p * 3 + 3), v * 3);
-    ring[v * 2] = first[p];
-    ring[v * 2 + 1] = first[p + 1] - first[p];
-  }
-  return { surface, ring, list, entries: first[points] };
 }
 
 // GPU playback of a clip primitive (the plugin's default for version-4 streams): the model's per-vertex data become
@@ -488,7 +426,7 @@ export class GpuPlayback {
     // Vertex indices are read from float textures: exact below 2^24.
     this.normals = normals && geometry.getAttribute('normal') !== undefined && V < 1 << 24;
     if (this.normals) {
-      const rings = surfaceRings(geometry.getAttribute('position').array, geometry.index.array);
+      const rings = surfaceRings(geometry.getAttribute('position').array, geometry.index.array, 3);
       geometry.setAttribute('segmorphSurface', new BufferAttribute(rings.surface, 3));
       geometry.setAttribute('segmorphRing', new BufferAttribute(rings.ring, 2));  // Uint32: uvec2
       this.triangleTexture = dataTexture(rings.list, rings.entries, 3);
@@ -568,25 +506,9 @@ void main() { segmorphShapeColour = vec4( segmorphShapePosition, 1.0 ); }`,
                                    interpolation === 'STEP' ? InterpolateDiscrete : InterpolateLinear);
   }
 
-  // The parameters at `influences` (one weight per frame): Σ w_f P_f + (1 − Σ w_f) P_0, into `out` (K × 12 motion
-  // floats, then N basis values).
+  // The parameters at `influences` (one weight per frame), into `out` (blendParameters).
   blend(influences, out) {
-    const { clusterCount: K, basisCount: N, motion, basis } = this.model, M = K * 12;
-    const sum = new Float64Array(M + N);
-    let rest = 1;
-    const add = (f, w) => {
-      for (let i = 0; i < M; ++i) sum[i] += w * motion[f * M + i];
-      for (let i = 0; i < N; ++i) sum[M + i] += w * basis[f * N + i];
-    };
-    for (let f = 0; f < influences.length; ++f) {
-      const w = influences[f];
-      if (w === 0) continue;
-      add(f, w);
-      rest -= w;
-    }
-    if (rest !== 0) add(0, rest);
-    for (let i = 0; i < M + N; ++i) out[i] = sum[i];
-    return out;
+    return blendParameters(this.model, influences, out);
   }
 
   // Uploads the mesh's parameters when its influences changed since the last draw.

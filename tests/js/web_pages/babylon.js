@@ -2,7 +2,8 @@
 // file segmorph decode wrote, loaded by Babylon's glTF loader alone. Per file:
 // - the pictures: each file in a scene of its own (one camera, a hemispheric light and a shadow-casting directional
 //   light, a ground), every animation group at frame times and between them, compared pixel by pixel; a control
-//   picture (the decoded file at another time) shows that the comparison sees the animation;
+//   picture (the decoded file a third of a group later, in the group that moves most) shows that the comparison sees
+//   the animation;
 // - the positions Babylon computes on the CPU (AbstractMesh.getPositionData: morph targets and skinning applied), in
 //   world space, at the same times, within the tolerance of the test's caller;
 // - a cross-fade between two groups (when there are two), weights 0.5 each;
@@ -35,20 +36,25 @@ const WIDTH = canvas.width, HEIGHT = canvas.height;
 
 // A scene with `url` loaded into it, staged: camera framing the decoded file's
 // bounds `box` (or its own), lights, a shadow-casting light and a ground.
-async function staged(url, box = null) {
+async function staged(url, box = null, options = null) {
   const scene = new Scene(engine);
   scene.clearColor = new Color4(0.25, 0.28, 0.38, 1);
+  const camera = new ArcRotateCamera('camera', 0.6, 1.1, 3, Vector3.Zero(), scene);
+  // What the file takes on the GPU: its load and its first frame, before the stage's lights, shadows and ground.
   const before = gpuBytes.allocated;
-  const container = await LoadAssetContainerAsync(url, scene);
+  const container = await LoadAssetContainerAsync(url, scene, options ? {
+    pluginOptions: { gltf: { extensionOptions: { SEGMORPH_animation_compression: options } } } } : undefined);
   container.addAllToScene();
   for (const group of container.animationGroups) group.stop();
   await scene.whenReadyAsync();  // textures decoded, shaders compiled
+  scene.render();
+  const allocated = gpuBytes.allocated - before;
   const meshes = container.meshes.filter((m) => m.getTotalVertices() > 0);
   if (!box) {
     let min = new Vector3(Infinity, Infinity, Infinity), max = new Vector3(-Infinity, -Infinity, -Infinity);
     for (const mesh of meshes) {
-      mesh.computeWorldMatrix(true);
       mesh.refreshBoundingInfo({ applySkeleton: true, applyMorph: true });
+      mesh.computeWorldMatrix(true);  // the box in world space
       const b = mesh.getBoundingInfo().boundingBox;
       min = Vector3.Minimize(min, b.minimumWorld);
       max = Vector3.Maximize(max, b.maximumWorld);
@@ -56,13 +62,20 @@ async function staged(url, box = null) {
     box = { min, max };
   }
   const centre = box.min.add(box.max).scale(0.5), radius = Math.max(box.max.subtract(box.min).length() / 2, 1e-6);
-  const camera = new ArcRotateCamera('camera', 0.6, 1.1, radius * 3, centre, scene);
+  camera.setTarget(centre);  // (recomputes the radius from the camera's position: set it after)
+  camera.radius = radius * 3;
   camera.minZ = radius / 100;
   camera.maxZ = radius * 100;
   new HemisphericLight('sky', new Vector3(0, 1, 0), scene).intensity = 0.6;
   const light = new DirectionalLight('sun', new Vector3(-0.4, -1, -0.3), scene);
   light.position = centre.subtract(light.direction.scale(radius * 4));
   light.intensity = 1.5;
+  // The shadow's projection from the decoded file's box, not fitted to the casters' bounds (a GPU-played mesh's are
+  // its model's box over every frame, the decoded file's its first frame's).
+  light.autoUpdateExtends = false;
+  light.autoCalcShadowZBounds = false;
+  Object.assign(light, { orthoLeft: -radius * 2, orthoRight: radius * 2, orthoTop: radius * 2, orthoBottom: -radius * 2,
+                         shadowMinZ: radius / 10, shadowMaxZ: radius * 10 });
   const shadows = new ShadowGenerator(512, light);
   for (const mesh of meshes) shadows.addShadowCaster(mesh);
   const ground = CreateGround('ground', { width: radius * 8, height: radius * 8 }, scene);
@@ -71,7 +84,7 @@ async function staged(url, box = null) {
   ground.material.diffuseColor = new Color3(0.8, 0.8, 0.8);
   ground.receiveShadows = true;
   scene.render();
-  return { scene, container, meshes, box, allocated: gpuBytes.allocated - before };
+  return { scene, container, meshes, box, allocated };
 }
 
 // The view drawn, once every shader its pose needs is compiled (a pose that changes the active morph targets' count
@@ -107,11 +120,21 @@ function pairs(a, b) {
   return out;
 }
 
-// World-space positions as Babylon computes them on the CPU (morph targets and skinning applied).
-function worldPositions(mesh) {
+// World-space positions: as Babylon computes them on the CPU (morph targets and skinning applied), or for a mesh that
+// plays on the GPU, its shape texture read back (the positions its material draws).
+async function worldPositions(mesh) {
   mesh.computeWorldMatrix(true);
   mesh.skeleton?.prepare(true);
-  const local = mesh.getPositionData(true, true), world = mesh.getWorldMatrix(), out = new Float64Array(local.length);
+  let local;
+  const player = mesh.metadata?.segmorph?.player;
+  if (player) {
+    const texels = await player.shape.readPixels(), count = mesh.getTotalVertices();
+    local = new Float32Array(count * 3);
+    for (let v = 0; v < count; ++v) local.set(texels.subarray(v * 4, v * 4 + 3), v * 3);
+  } else {
+    local = mesh.getPositionData(true, true);
+  }
+  const world = mesh.getWorldMatrix(), out = new Float64Array(local.length);
   const p = new Vector3();
   for (let i = 0; i < local.length; i += 3) {
     Vector3.TransformCoordinatesFromFloatsToRef(local[i], local[i + 1], local[i + 2], world, p);
@@ -139,14 +162,15 @@ function show(view, frame, g, weights = null) {
   });
 }
 
-window.babylonCase = async (compressedUrl, decodedUrl) => {
+// options: the extension's (null: its defaults).
+window.babylonCase = async (compressedUrl, decodedUrl, options = null) => {
   const started = performance.now();
   const decoded = await staged(decodedUrl);
-  const compressed = await staged(compressedUrl, decoded.box);
+  const compressed = await staged(compressedUrl, decoded.box, options);
   const loadMilliseconds = performance.now() - started;
-  const result = { pictures: 0, worstPicture: 0, control: 1, positions: 0, worstPosition: 0, frames: 0,
+  const result = { pictures: 0, worstPicture: 0, control: 0, positions: 0, worstPosition: 0, frames: 0,
                    diagonal: decoded.box.max.subtract(decoded.box.min).length(), loadMilliseconds,
-                   playbacks: compressed.meshes.map((m) => m.metadata?.segmorph).filter((p) => p), bytes: { compressed: compressed.allocated, decoded: decoded.allocated },
+                   playbacks: compressed.meshes.map((m) => m.metadata?.segmorph).filter((p) => p).map(({ mode, version }) => ({ mode, version })), bytes: { compressed: compressed.allocated, decoded: decoded.allocated },
                    groups: compressed.container.animationGroups.length };
   if (compressed.container.animationGroups.length !== decoded.container.animationGroups.length)
     throw new Error(`${compressed.container.animationGroups.length} animation groups, the decoded file has ${decoded.container.animationGroups.length}`);
@@ -159,7 +183,7 @@ window.babylonCase = async (compressedUrl, decodedUrl) => {
     result.worstPicture = Math.max(result.worstPicture, d);
     result.pictures += 1;
     for (const [x, y] of meshPairs) {
-      const d = largestDifference(worldPositions(x), worldPositions(y));
+      const d = largestDifference(await worldPositions(x), await worldPositions(y));
       if (d > result.worstPosition) result.worstAt = { frame, group: g, weights, mesh: x.name };
       result.worstPosition = Math.max(result.worstPosition, d);
       result.positions += 1;
@@ -176,7 +200,7 @@ window.babylonCase = async (compressedUrl, decodedUrl) => {
       if (k === 2) control = b;
       result.frames += 1;
     }
-    if (first && control) result.control = Math.min(result.control, difference(first, control));
+    if (first && control) result.control = Math.max(result.control, difference(first, control));
   }
   if (decoded.container.animationGroups.length >= 2) {
     const groups = decoded.container.animationGroups, frame = Math.min(groups[0].to, groups[1].to) / 3;
