@@ -7,8 +7,9 @@
 //      and between them (lit, with a shadow on a ground) match, and so do the positions within 1e-5 of the diagonal
 //      (Babylon's CPU evaluation of morph targets and skins; a GPU-played mesh's shape texture read back), also in a
 //      cross-fade of two animation groups; every version-4 stream of clips plays on the GPU (and, with { playback:
-//      'morph' }, the first file with one plays as morph targets); on the shared sequences the GPU bytes of the load
-//      and first frame are at most a fifth of the decoded file's.
+//      'morph' }, the first file with one plays as morph targets; the first sequence also with a StandardMaterial
+//      given after the load, through its player); on the shared sequences the GPU bytes of the load and first frame
+//      are at most a fifth of the decoded file's.
 //   2. A damaged and a truncated stream make the load reject with a message naming the extension and the primitive.
 //   3. The example page (examples/babylon) plays the cow (without the shared samples, the baked fox) on the GPU, and
 //      its picture moves.
@@ -79,7 +80,11 @@ try {
 
   // Every case at the extension's defaults, and the first with a version-4 stream also as morph targets.
   const morph = cases.find((c) => c.versions.includes(4));
-  const runs = [...cases, ...(morph ? [{ ...morph, label: `${morph.label}, playback 'morph'`, options: { playback: 'morph' } }] : [])];
+  // and the first with a version-4 stream of the shared sequences (else of all) with a StandardMaterial given after the
+  // load.
+  const standard = cases.find((c) => c.sequence && c.versions.includes(4)) ?? morph;
+  const runs = [...cases, ...(morph ? [{ ...morph, label: `${morph.label}, playback 'morph'`, options: { playback: 'morph' } }] : []),
+                ...(standard ? [{ ...standard, label: `${standard.label}, StandardMaterial`, options: { standardMaterial: true } }] : [])];
   for (const c of runs) {
     try {
       const r = await page.evaluate(([a, b, options]) => window.babylonCase(a, b, options),
@@ -96,6 +101,8 @@ try {
         problems.push(`GPU bytes ${megabytes(r.bytes.compressed)}, more than a fifth of the decoded file's ${megabytes(r.bytes.decoded)}`);
       if (!(relative <= POSITION_TOLERANCE)) problems.push(`positions differ by ${relative.toExponential(2)} of the diagonal (${JSON.stringify(r.worstAt)})`);
       if (!(r.worstPicture <= PICTURE_TOLERANCE)) problems.push(`pictures differ on ${(r.worstPicture * 100).toFixed(2)} % of pixels`);
+      if (r.leftInScene.length) problems.push(`removeAllFromScene left ${r.leftInScene.join(', ')} in the scene`);
+      if (r.pictures > 0 && !(r.control > 0)) problems.push('the control sees no motion');
       if (r.worstPicture > 0 && !(r.control > 4 * r.worstPicture))
         problems.push(`the control differs on only ${(r.control * 100).toFixed(2)} % of pixels`);
       const line = `${c.label}: ${r.groups} animation groups, ${r.frames} times${r.crossFade ? ' and a cross-fade' : ''}, ` +

@@ -66,6 +66,7 @@ export class SegmorphExtension {
     if (!['gpu', 'morph'].includes(this.options.playback))
       throw new Error(`${NAME}: playback must be 'gpu' or 'morph', not '${this.options.playback}'`);
     this.playbacks = [];  // per clip primitive: { what, mode: 'gpu' | 'morph', version }
+    this.fallbacks = [];  // why a version-4 stream plays as morph targets under 'gpu' (the engine cannot)
     this.views = new Map();  // synthetic bufferView → its decoded bytes (coded tracks)
     this.decodeMilliseconds = 0;  // time spent in the decoder
   }
@@ -126,7 +127,13 @@ export class SegmorphExtension {
   // The compressed primitives, once the loader has built the meshes (their Draco base meshes decoded) and the
   // animation groups, before it starts any animation.
   async onReady() {
-    const gltf = this._loader.gltf, work = [];
+    const gltf = this._loader.gltf, work = [], scene = this._loader.babylonScene;
+    // What the work below makes (materials, textures, morph target managers) goes where the loader's own objects went:
+    // into the asset container of LoadAssetContainerAsync (so that addAllToScene, removeAllFromScene and dispose handle
+    // it), else the scene.
+    const container = this._loader._assetContainer, lists = ['materials', 'textures', 'morphTargetManagers'];
+    const before = lists.map((list) => new Set(scene[list]));
+    this.ownsEntities = !container;
     (gltf.meshes ?? []).forEach((mesh, m) =>
       mesh.primitives.forEach((primitive, p) => {
         const extension = primitive.extensions?.[NAME];
@@ -137,7 +144,20 @@ export class SegmorphExtension {
         work.push(extension.morphTargets ? this._keptTargets(meshes, extension, what)
                                          : this._clips(meshes, extension, what));
       }));
-    await Promise.all(work);
+    try {
+      await Promise.all(work);
+    } finally {
+      if (container) {
+        const remove = { materials: 'removeMaterial', textures: 'removeTexture', morphTargetManagers: 'removeMorphTargetManager' };
+        lists.forEach((list, i) => {
+          for (const made of scene[list].filter((o) => !before[i].has(o))) {
+            scene[remove[list]](made);
+            container[list].push(made);
+            made._parentContainer = container;
+          }
+        });
+      }
+    }
   }
 
   async _inputs(mesh, extension, what) {
@@ -149,22 +169,34 @@ export class SegmorphExtension {
     return { stream, positions, indices: Uint32Array.from(indices) };
   }
 
+  // Every node that uses the mesh has a Mesh and a MorphTargetManager of its own (the loader instances no mesh with
+  // targets): each gets the shapes.
   async _keptTargets(meshes, extension, what) {
-    const mesh = meshes[0], manager = mesh.morphTargetManager;
+    const mesh = meshes[0];
     const { stream, positions, indices } = await this._inputs(mesh, extension, what);
     const decoded = await this._timed(what, () => SegmorphDecoder.decodeTargetsAsync(stream, positions, indices));
-    const count = manager?.numTargets ?? 0;
+    const count = mesh.morphTargetManager?.numTargets ?? 0;
     if (decoded.targetCount !== count) throw new Error(`${what}: the stream holds ${decoded.targetCount} targets, the primitive has ${count}`);
     const floats = positions.length, baseNormals = mesh.getVerticesData(VertexBuffer.NormalKind, false, true);
     const normals = this.options.normals && baseNormals && new SurfaceNormals(positions, indices, baseNormals);
+    const shapes = [], turned = [];
     for (let t = 0; t < count; ++t) {
-      const target = manager.getTarget(t), shape = new Float32Array(floats);
+      const shape = new Float32Array(floats);
       for (let i = 0; i < floats; ++i) shape[i] = positions[i] + decoded.deltas[t * floats + i];
-      target.setPositions(shape);
-      if (normals && target.hasNormals) target.setNormals(normals.turned(shape));
+      shapes.push(shape);
+      turned.push(normals ? normals.turned(shape) : null);
     }
-    manager.synchronize();  // the targets' texture made again from the filled-in shapes
-    mesh.refreshBoundingInfo({ applyMorph: true });
+    for (const m of meshes) {
+      const manager = m.morphTargetManager;
+      if (manager?.numTargets !== count) throw new Error(`${what}: a node's mesh has ${manager?.numTargets ?? 0} targets, the stream ${count}`);
+      for (let t = 0; t < count; ++t) {
+        const target = manager.getTarget(t);
+        target.setPositions(shapes[t]);
+        if (turned[t] && target.hasNormals) target.setNormals(turned[t]);
+      }
+      manager.synchronize();  // the targets' texture made again from the filled-in shapes
+      m.refreshBoundingInfo({ applyMorph: true });
+    }
   }
 
   async _clips(meshes, extension, what) {
@@ -175,6 +207,7 @@ export class SegmorphExtension {
       if (!accessor) throw new Error(`${what}: clip ${c} names accessor ${clip.times}, which does not exist`);
       return this._loader._loadFloatAccessorAsync(`/accessors/${clip.times}`, accessor);
     }));
+    let fallback = null;  // why a version-4 stream plays as morph targets under 'gpu'
     if (this.options.playback === 'gpu') {
       let model = null;
       try {
@@ -182,13 +215,24 @@ export class SegmorphExtension {
       } catch (error) {
         if (!error.unsupported) throw error;  // damaged: reject; versions 1-3: morph targets below
       }
-      if (model) {
+      const unplayable = model && gpuUnplayable(scene, model, indices);
+      if (unplayable) {
+        fallback = unplayable;
+        this.fallbacks.push(`${what}: ${unplayable}: played as morph targets`);
+      }
+      if (model && !unplayable) {
         checkClips(model.clipFrames, extension, times.map((t) => t.length), what);
         this.playbacks.push({ what, mode: 'gpu', version: model.version });
         const normals = this.options.normals && mesh.getVerticesData(VertexBuffer.NormalKind) !== null;
-        const player = new GpuPlayback(model, meshes, positions, indices, normals);
-        await player.ready();
-        this._animate(player.targets, extension, times, `${mesh.name}`, what);
+        let player = null;
+        try {
+          player = new GpuPlayback(model, meshes, positions, indices, normals, this.ownsEntities);
+          await player.ready();
+          this._animate(player.targets, extension, times, `${mesh.name}`, what);
+        } catch (error) {
+          player?.dispose();
+          throw new Error(`${what}: ${error.message}`);
+        }
         return;
       }
     }
@@ -213,7 +257,7 @@ export class SegmorphExtension {
       }
     });
     manager.areUpdatesFrozen = false;
-    const playback = { mode: 'morph', version: decoded.version };
+    const playback = { mode: 'morph', version: decoded.version, ...(fallback ? { reason: fallback } : {}) };
     for (const m of meshes) {
       m.setVerticesData(VertexBuffer.PositionKind, shown.positions, false);
       if (shown.normals) m.setVerticesData(VertexBuffer.NormalKind, shown.normals, false);
@@ -362,6 +406,7 @@ function floatTexture(scene, values, count, width = textureWidth(Math.max(count,
   const texture = new RawTexture(data, width, height, Constants.TEXTUREFORMAT_RGBA, scene, false, false,
                                  Constants.TEXTURE_NEAREST_SAMPLINGMODE, Constants.TEXTURETYPE_FLOAT);
   texture.wrapU = texture.wrapV = Constants.TEXTURE_CLAMP_ADDRESSMODE;
+  texture.name = 'segmorph model';
   return texture;
 }
 
@@ -373,9 +418,12 @@ function floatTexture(scene, values, count, width = textureWidth(Math.max(count,
 // texture (SHAPE_GLSL), from which the meshes' cloned materials (SegmorphPlugin) take positions and turn normals.
 // Their shadows follow through a ShadowDepthWrapper of each material. The bounds are the model's box.
 export class GpuPlayback {
-  constructor(model, meshes, positions, indices, normals) {
+  // ownsTextures: this player disposes its textures (false when an asset container holds them).
+  constructor(model, meshes, positions, indices, normals, ownsTextures = true) {
     this.model = model;
     this.meshes = meshes;
+    this.normals = normals;
+    this.ownsTextures = ownsTextures;
     const scene = meshes[0].getScene(), engine = scene.getEngine();
     const { vertexCount: V, clusterCount: K, coefficientCount: C, basisCount: N, frameCount: F } = model;
     if (V >= 1 << 24 || C >= 1 << 24) throw new Error(`${V} vertices and ${C} coefficient vectors: more than a float indexes exactly`);
@@ -436,25 +484,32 @@ export class GpuPlayback {
     const b = model.bounds;
     for (const mesh of meshes) {
       mesh.morphTargetManager = null;
-      const clone = (material) => {
-        const copy = material.clone(`${material.name} (segmorph)`);
-        copy.segmorph = new SegmorphPlugin(copy, this, normals);
-        copy.shadowDepthWrapper = new ShadowDepthWrapper(copy, scene);
-        return copy;
-      };
-      if (mesh.material) mesh.material = clone(mesh.material);
+      if (mesh.material) mesh.material = this.material(mesh.material);
       mesh.setBoundingInfo(new BoundingInfo(new Vector3(b[0], b[1], b[2]), new Vector3(b[3], b[4], b[5])));
-      mesh.doNotSyncBoundingInfo = true;
+      mesh.getBoundingInfo().isLocked = true;  // the model's box (every frame), which follows the node's world matrix
       mesh.metadata = { ...mesh.metadata, segmorph: { mode: 'gpu', version: model.version, player: this } };
     }
     this._observer = scene.onBeforeRenderObservable.add(() => this.update());
-    scene.onDisposeObservable.addOnce(() => this.dispose());
+    this._sceneObserver = scene.onDisposeObservable.addOnce(() => this.dispose());
+    meshes[0].onDisposeObservable.addOnce(() => this.dispose());
+  }
+
+  // A clone of `material` that draws this player's shape and casts its shadow: each mesh's material gets one at the
+  // load; a material given to a mesh later needs one too (mesh.material = player.material(new StandardMaterial(...))).
+  material(material) {
+    const copy = material.clone(`${material.name} (segmorph)`);
+    copy.segmorph = new SegmorphPlugin(copy, this, this.normals);
+    copy.shadowDepthWrapper = new ShadowDepthWrapper(copy, this.meshes[0].getScene());
+    return copy;
   }
 
   // Resolves once the pass's shader is compiled; the first shape is then evaluated.
   async ready() {
-    for (let waited = 0; !this.pass.isReady(); waited += 10) {
-      if (waited > 60000) throw new Error('the GPU playback shader did not compile in 60 s');
+    const started = performance.now();
+    while (!this.pass.isReady()) {
+      const error = this.pass.effect?.getCompilationError?.();
+      if (error) throw new Error(`the GPU playback shader does not compile: ${error}`);
+      if (performance.now() - started > 60000) throw new Error('the GPU playback shader did not compile in 60 s');
       await new Promise((resolve) => setTimeout(resolve, 10));
     }
     this.update();
@@ -479,13 +534,32 @@ export class GpuPlayback {
     this.renderer.render(this.pass, this.shape);
   }
 
+  // Frees what the player holds: its observers, the pass, and its textures where it owns them. Once.
   dispose() {
-    this.meshes[0]?.getScene().onBeforeRenderObservable.remove(this._observer);
-    for (const texture of [...this.textures, this.clusterTexture, this.coefficientTexture, this.parameterTexture, this.shape,
-                           this.triangleTexture]) texture?.dispose();
+    if (this.disposed) return;
+    this.disposed = true;
+    const scene = this.meshes[0]?.getScene();
+    scene?.onBeforeRenderObservable.remove(this._observer);
+    scene?.onDisposeObservable.remove(this._sceneObserver);
+    if (this.ownsTextures)
+      for (const texture of [...this.textures, this.clusterTexture, this.coefficientTexture, this.parameterTexture, this.shape,
+                             this.triangleTexture]) texture?.dispose();
     this.pass.dispose();
     this.renderer.dispose();
   }
+}
+
+// Why `scene`'s engine cannot play `model` on the GPU (null: it can): GPU playback needs WebGL 2 (GLSL ES 3.0:
+// texelFetch, gl_VertexID), float render targets, textures wide enough, and indices that floats hold exactly.
+function gpuUnplayable(scene, model, indices) {
+  const engine = scene.getEngine(), caps = engine.getCaps();
+  if (engine.isWebGPU || !(engine.webGLVersion >= 2)) return 'GPU playback needs WebGL 2';
+  if (!caps.textureFloatRender) return 'GPU playback needs float render targets';
+  const widest = Math.max(model.vertexCount, model.coefficientCount, indices.length, model.clusterCount * 3);
+  if (Math.ceil(Math.sqrt(widest)) * 2 > caps.maxTextureSize || model.clusterCount > caps.maxTextureSize)
+    return `its textures would be wider than ${caps.maxTextureSize} texels`;
+  if (indices.length >= 1 << 24) return 'more triangle corners than a float indexes exactly';
+  return null;
 }
 
 // Keys of the influence of frame f of a clip whose frames are at `times`: 1 at its time, 0 at its neighbours' and

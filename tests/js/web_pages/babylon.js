@@ -162,11 +162,12 @@ function show(view, frame, g, weights = null) {
   });
 }
 
-// options: the extension's (null: its defaults).
+// options: the extension's (null: its defaults), and standardMaterial: both files drawn with a StandardMaterial.
 window.babylonCase = async (compressedUrl, decodedUrl, options = null) => {
   const started = performance.now();
   const decoded = await staged(decodedUrl);
-  const compressed = await staged(compressedUrl, decoded.box, options);
+  const { standardMaterial, ...extension } = options ?? {};
+  const compressed = await staged(compressedUrl, decoded.box, Object.keys(extension).length ? extension : null);
   const loadMilliseconds = performance.now() - started;
   const result = { pictures: 0, worstPicture: 0, control: 0, positions: 0, worstPosition: 0, frames: 0,
                    diagonal: decoded.box.max.subtract(decoded.box.min).length(), loadMilliseconds,
@@ -175,6 +176,17 @@ window.babylonCase = async (compressedUrl, decodedUrl, options = null) => {
   if (compressed.container.animationGroups.length !== decoded.container.animationGroups.length)
     throw new Error(`${compressed.container.animationGroups.length} animation groups, the decoded file has ${decoded.container.animationGroups.length}`);
   const meshPairs = pairs(compressed.meshes, decoded.meshes);
+  if (options?.standardMaterial) {
+    // Both files' meshes drawn with a StandardMaterial given after the load (a GPU-played mesh's through its player).
+    for (const [x, y] of meshPairs) {
+      const material = (scene) => Object.assign(new StandardMaterial('standard', scene), { diffuseColor: new Color3(0.9, 0.6, 0.3) });
+      const player = x.metadata?.segmorph?.player;
+      x.material = player ? player.material(material(compressed.scene)) : material(compressed.scene);
+      y.material = material(decoded.scene);
+    }
+    await compressed.scene.whenReadyAsync();
+    await decoded.scene.whenReadyAsync();
+  }
   const compare = async (frame, g, weights) => {
     show(compressed, frame, g, weights);
     show(decoded, frame, g, weights);
@@ -208,6 +220,13 @@ window.babylonCase = async (compressedUrl, decodedUrl, options = null) => {
     await compare(frame, 0, weights);
     result.crossFade = true;
   }
+  // The compressed file's container taken out of its scene takes everything the extension made with it (but the
+  // materials given after the load).
+  compressed.container.removeAllFromScene();
+  compressed.scene.render();
+  result.leftInScene = standardMaterial ? [] : [...compressed.scene.materials.filter((m) => m.name.endsWith('(segmorph)')).map((m) => m.name),
+                        ...compressed.scene.textures.filter((t) => t.name.startsWith('segmorph')).map((t) => t.name),
+                        ...compressed.scene.morphTargetManagers.map(() => 'a morph target manager')];
   for (const view of [compressed, decoded]) {
     view.container.dispose();
     view.scene.dispose();
