@@ -59,6 +59,16 @@ struct DecodedSizes {
   size_t coded_animations = 0;  // animations whose tracks were coded
 };
 
+// What an encoded primitive's SEGMORPH_animation_compression stream is: its version (0 where the primitive has no
+// stream, or its bufferView holds no stream header) and whether it keeps morph targets. A version-4 stream of clips
+// plays on the GPU from its model (docs/runtime.md, "Playing the model").
+struct StreamKind {
+  int version = 0;
+  bool kept_targets = false;
+  bool gpu_playable() const { return version == 4 && !kept_targets; }
+};
+StreamKind compressed_stream_kind(const tinygltf::Model& model, int mesh, int primitive);
+
 // Replaces KHR_draco_mesh_compression primitives by plain accessors (the first step of decode_compressed_model),
 // decoding up to `threads` primitives at once (0: every hardware thread); the model written is the same for any.
 Status decode_draco_primitives(tinygltf::Model& model, size_t threads = 1);

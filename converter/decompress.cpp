@@ -12,6 +12,7 @@
 #include "primitive_encoding.h"
 #include "segmorph/decoder.h"
 #include "segmorph_extension.h"
+#include "stream_format.h"
 #include "topology.h"
 #include "tracks.h"
 
@@ -161,6 +162,25 @@ Status write_decoded_attribute(const BaseMeshAttribute& attribute, const std::st
 }
 
 }  // namespace
+
+StreamKind compressed_stream_kind(const tinygltf::Model& model, int mesh, int primitive) {
+  StreamKind kind;
+  if (mesh < 0 || size_t(mesh) >= model.meshes.size() || primitive < 0 ||
+      size_t(primitive) >= model.meshes[size_t(mesh)].primitives.size())
+    return kind;
+  const auto& extensions = model.meshes[size_t(mesh)].primitives[size_t(primitive)].extensions;
+  const auto found = extensions.find(kExtensionName);
+  CompressedPrimitive compressed;
+  const unsigned char* data = nullptr;
+  size_t size = 0;
+  if (found == extensions.end() || !parse_compressed_primitive(found->second, compressed).ok() ||
+      !buffer_view_bytes(model, compressed.buffer_view, kExtensionName, &data, &size).ok() ||
+      size <= sizeof(format::kMagic) || !std::equal(std::begin(format::kMagic), std::end(format::kMagic), data))
+    return kind;
+  kind.version = data[sizeof(format::kMagic)];
+  kind.kept_targets = compressed.morph_targets;
+  return kind;
+}
 
 Status decode_draco_primitives(tinygltf::Model& model, size_t threads) {
   // The primitives to decode, in order, up to the first that cannot be (its error comes after theirs).

@@ -231,10 +231,9 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
       if (stream.mesh == primitive.output_mesh && stream.primitive == primitive.output_primitive)
         primitive.clusters = stream.clusters;
     primitive.bytes = coded_bytes(encoded.model, primitive.output_mesh, primitive.output_primitive);
-    bool kept_targets = false;
-    primitive.stream_version =
-        compressed_stream_version(encoded.model, primitive.output_mesh, primitive.output_primitive, kept_targets);
-    primitive.gpu_playable = primitive.stream_version == 4 && !kept_targets;
+    const StreamKind stream = compressed_stream_kind(encoded.model, primitive.output_mesh, primitive.output_primitive);
+    primitive.stream_version = stream.version;
+    primitive.gpu_playable = stream.gpu_playable();
     primitive.error = primitive_error(file.model, compared);
     report.primitives.push_back(primitive);
   }

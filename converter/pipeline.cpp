@@ -8,10 +8,10 @@
 
 #include "bake.h"
 #include "comparison.h"
+#include "compressed.h"
 #include "encode.h"
 #include "gltf_io.h"
 #include "output_file.h"
-#include "segmorph_extension.h"
 #include "topology.h"
 
 namespace segmorph {
@@ -126,19 +126,9 @@ const char* mode_name(PrimitiveMode mode) {
 }
 
 Status info(const Model& model, const SampleSettings& settings, InfoReport& report, const Progress& progress) {
-  // The streams' versions, read before the file is decoded for sampling.
-  std::vector<PrimitiveInfo> streams;
   const tinygltf::Model& encoded = model.data().gltf;
-  for (size_t m = 0; m < encoded.meshes.size(); ++m)
-    for (size_t p = 0; p < encoded.meshes[m].primitives.size(); ++p) {
-      PrimitiveInfo stream;
-      stream.mesh = int(m), stream.primitive = int(p);
-      stream.stream_version = compressed_stream_version(encoded, int(m), int(p), stream.kept_targets);
-      stream.gpu_playable = stream.stream_version == 4 && !stream.kept_targets;
-      if (stream.stream_version) streams.push_back(stream);
-    }
   SampledFile file;
-  SEGMORPH_RETURN_IF_ERROR(analyze_model(model.data().gltf, settings, true, progress, file));
+  SEGMORPH_RETURN_IF_ERROR(analyze_model(encoded, settings, true, progress, file));
   report = InfoReport();
   report.animations = file.model.animations.size();
   for (const SampledNode& node : file.sampled) {
@@ -158,12 +148,10 @@ Status info(const Model& model, const SampleSettings& settings, InfoReport& repo
       out.connected_components = topology.component_count;
       // The decoded file may give the node a new mesh: the node's mesh in the encoded file holds the stream.
       const int node_mesh = size_t(out.node) < encoded.nodes.size() ? encoded.nodes[size_t(out.node)].mesh : -1;
-      for (const PrimitiveInfo& stream : streams)
-        if (stream.mesh == node_mesh && stream.primitive == out.primitive) {
-          out.stream_version = stream.stream_version;
-          out.kept_targets = stream.kept_targets;
-          out.gpu_playable = stream.gpu_playable;
-        }
+      const StreamKind stream = compressed_stream_kind(encoded, node_mesh, out.primitive);
+      out.stream_version = stream.version;
+      out.kept_targets = stream.kept_targets;
+      out.gpu_playable = stream.gpu_playable();
       for (size_t c = 0; c < primitive.clips.size(); ++c) {
         const FrameSequence& clip = primitive.clips[c];
         const Clip& source = file.scene.clips[size_t(animated.clips[c])];

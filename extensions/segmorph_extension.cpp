@@ -198,22 +198,4 @@ Status read_compressed_mesh(const tinygltf::Model& model, size_t m, std::vector<
   return Status::Ok();
 }
 
-int compressed_stream_version(const tinygltf::Model& gltf, int mesh, int primitive, bool& kept_targets) {
-  kept_targets = false;
-  if (mesh < 0 || size_t(mesh) >= gltf.meshes.size() || primitive < 0 ||
-      size_t(primitive) >= gltf.meshes[size_t(mesh)].primitives.size())
-    return 0;
-  const auto& extensions = gltf.meshes[size_t(mesh)].primitives[size_t(primitive)].extensions;
-  const auto found = extensions.find(kExtensionName);
-  CompressedPrimitive compressed;
-  if (found == extensions.end() || !parse_compressed_primitive(found->second, compressed).ok() ||
-      compressed.buffer_view < 0 || size_t(compressed.buffer_view) >= gltf.bufferViews.size())
-    return 0;
-  kept_targets = compressed.morph_targets;
-  const tinygltf::BufferView& view = gltf.bufferViews[size_t(compressed.buffer_view)];
-  if (view.buffer < 0 || size_t(view.buffer) >= gltf.buffers.size() || view.byteLength < 5) return 0;
-  const std::vector<unsigned char>& data = gltf.buffers[size_t(view.buffer)].data;
-  return view.byteOffset + 4 < data.size() ? int(data[view.byteOffset + 4]) : 0;
-}
-
 }  // namespace segmorph

@@ -71,10 +71,6 @@ tinygltf::Value placeholder_value();
 Status read_compressed_mesh(const tinygltf::Model& model, size_t mesh, std::vector<CompressedPrimitive>& primitives,
                             int& node);
 
-// The version of the stream of mesh `mesh` primitive `primitive` (its header's byte 4; 0 when the primitive has no
-// SEGMORPH_animation_compression stream or its bytes are absent), and whether that stream keeps morph targets.
-int compressed_stream_version(const tinygltf::Model& gltf, int mesh, int primitive, bool& kept_targets);
-
 // Adds `name` to extensionsUsed (and extensionsRequired when `required`), once; or removes it from both.
 void declare_extension(tinygltf::Model& model, const std::string& name, bool required);
 void undeclare_extension(tinygltf::Model& model, const std::string& name);

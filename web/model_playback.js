@@ -3,18 +3,21 @@
 // around each vertex for its normals.
 import { SurfaceNormals } from './surface_normals.js';
 
-// GLSL (ES 3.0) of the model's evaluation, in the C API's float32 arithmetic and order
+// GLSL (ES 3.0) of texel i of a texture read in rows, as every texture of the GPU playback is.
+export const TEXEL_GLSL = /* glsl */`
+vec4 segmorphTexel( highp sampler2D map, int i ) {
+	int width = textureSize( map, 0 ).x;
+	return texelFetch( map, ivec2( i % width, i / width ), 0 );
+}
+`;
+
+// GLSL (ES 3.0, after TEXEL_GLSL) of the model's evaluation, in the C API's float32 arithmetic and order
 // (segmorph_decoder_model_evaluate): segmorphEvaluate(x, clusters, weights, offset) is the position of a vertex at
 // base position x with its 4 (cluster, weight) pairs, its own cluster first, and its first coefficient vector at
 // texel `offset`. The caller declares the samplers: segmorphParameters (cluster k's [A | t] rows at texels 3k .. 3k + 2,
 // then the basis values 4 to a texel), segmorphClusters (row k: its centroid, then (first basis value, m_k)) and
 // segmorphCoefficients (the coefficient vectors).
 export const MODEL_GLSL = /* glsl */`
-vec4 segmorphTexel( highp sampler2D map, int i ) {
-	int width = textureSize( map, 0 ).x;
-	return texelFetch( map, ivec2( i % width, i / width ), 0 );
-}
-
 vec3 segmorphEvaluate( vec3 x, ivec4 clusters, vec4 weights, int offset ) {
 	vec3 p = vec3( 0.0 );
 	for ( int j = 0; j < 4; ++ j ) {
@@ -39,6 +42,28 @@ vec3 segmorphEvaluate( vec3 x, ivec4 clusters, vec4 weights, int offset ) {
 		r = r + segmorphTexel( segmorphCoefficients, offset + i ).xyz * b;
 	}
 	return p + r;
+}
+`;
+
+// GLSL (ES 3.0, after TEXEL_GLSL) of normals that turn with the surface, as segmorph decode turns them (SurfaceNormals):
+// segmorphTurn(n, surface, first, count) is n turned by the smallest rotation taking `surface` (the base surface
+// normal around the vertex's point) to today's, the normalized sum of the cross products of the `count` triangles
+// from entry `first` of segmorphTriangles (each a texel of three vertex indices) at today's positions, texels of
+// segmorphShape. The caller declares both samplers.
+export const TURN_GLSL = /* glsl */`
+vec3 segmorphTurn( vec3 n, vec3 surface, int first, int count ) {
+	vec3 now = vec3( 0.0 );
+	for ( int i = 0; i < count; ++ i ) {
+		ivec3 t = ivec3( segmorphTexel( segmorphTriangles, first + i ).xyz );
+		vec3 a = segmorphTexel( segmorphShape, t.x ).xyz;
+		now += cross( segmorphTexel( segmorphShape, t.y ).xyz - a, segmorphTexel( segmorphShape, t.z ).xyz - a );
+	}
+	float size = length( now );
+	if ( size > 0.0 ) now /= size;
+	vec3 c = cross( surface, now );
+	float cosine = dot( surface, now );
+	if ( cosine > -0.999999 ) n = n * cosine + cross( c, n ) + c * ( dot( c, n ) / ( 1.0 + cosine ) );
+	return n;
 }
 `;
 

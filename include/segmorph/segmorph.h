@@ -185,7 +185,8 @@ struct EncodeSettings {
   int max_stream_version = 4;
   // Only GPU-playable streams: every stream of clips version 4 (its model is what a player evaluates in the vertex
   // shader, docs/runtime.md), even where version 3 would be smaller; an encode where a primitive cannot have one at
-  // the error target fails (UNSUPPORTED). Kept morph targets are coded as without it (they play as morph targets). Error targets only, not with fast_decode or a max_stream_version below 4.
+  // the error target fails (UNSUPPORTED). Kept morph targets are coded as without it (they play as morph targets).
+  // Error targets only, not with fast_decode or a max_stream_version below 4.
   bool gpu_playable = false;
   // Threads for the stages that split their work (the motion fits and refinement, the residual steps' measurement of
   // rate control, the comparison with the input); 0: every hardware thread. The output is the same bytes for every

@@ -48,7 +48,7 @@ import { registerGLTFExtension, unregisterGLTFExtension } from '@babylonjs/loade
 
 import { NAME, checkClips, trackLayout } from '../gltf_extension.js';
 import { SegmorphDecoder } from '../segmorph_decoder.js';
-import { MODEL_GLSL, blendParameters, surfaceRings, textureWidth } from '../model_playback.js';
+import { MODEL_GLSL, TEXEL_GLSL, TURN_GLSL, blendParameters, surfaceRings, textureWidth } from '../model_playback.js';
 import { SurfaceNormals } from '../surface_normals.js';
 
 export { SegmorphDecoder };
@@ -65,10 +65,7 @@ export class SegmorphExtension {
     this.options = { normals: true, playback: 'gpu', ...options };
     if (!['gpu', 'morph'].includes(this.options.playback))
       throw new Error(`${NAME}: playback must be 'gpu' or 'morph', not '${this.options.playback}'`);
-    this.playbacks = [];  // per clip primitive: { what, mode: 'gpu' | 'morph', version }
-    this.fallbacks = [];  // why a version-4 stream plays as morph targets under 'gpu' (the engine cannot)
     this.views = new Map();  // synthetic bufferView → its decoded bytes (coded tracks)
-    this.decodeMilliseconds = 0;  // time spent in the decoder
   }
 
   dispose() {
@@ -76,14 +73,12 @@ export class SegmorphExtension {
     this.views.clear();
   }
 
-  async _timed(what, decode) {
-    const started = performance.now();
+  // `decode()`'s result, its errors prefixed with `what` (and still saying whether the stream is of an earlier version).
+  async _named(what, decode) {
     try {
       return await decode();
     } catch (error) {
       throw Object.assign(new Error(`${what}: ${error.message}`), { unsupported: error.unsupported === true });
-    } finally {
-      this.decodeMilliseconds += performance.now() - started;
     }
   }
 
@@ -103,9 +98,9 @@ export class SegmorphExtension {
       if (!coded) continue;
       const what = `${NAME}: animation ${a}`;
       const { timeAccessors, samplers } = trackLayout(gltf, animations[a], coded, what);
-      const stream = await this._timed(what, () => this._bytes(coded.bufferView));
+      const stream = await this._named(what, () => this._bytes(coded.bufferView));
       const counts = timeAccessors.map((i) => gltf.accessors[i].count);
-      const decoded = await this._timed(what, () => SegmorphDecoder.decodeTracks(stream, counts, samplers));
+      const decoded = await this._named(what, () => SegmorphDecoder.decodeTracks(stream, counts, samplers));
       timeAccessors.forEach((accessor, i) => this._serve(gltf, accessor, decoded.times[i]));
       coded.samplers.forEach((s, i) => this._serve(gltf, animations[a].samplers[s].output, decoded.values[i]));
     }
@@ -165,7 +160,7 @@ export class SegmorphExtension {
     if (!(positions instanceof Float32Array) || positions.length === 0) throw new Error(`${what}: its base mesh has no float POSITION`);
     const indices = mesh.getIndices(false, true);
     if (!indices || indices.length === 0) throw new Error(`${what}: its base mesh has no triangles`);
-    const stream = await this._timed(what, () => this._bytes(extension.bufferView));
+    const stream = await this._named(what, () => this._bytes(extension.bufferView));
     return { stream, positions, indices: Uint32Array.from(indices) };
   }
 
@@ -174,7 +169,7 @@ export class SegmorphExtension {
   async _keptTargets(meshes, extension, what) {
     const mesh = meshes[0];
     const { stream, positions, indices } = await this._inputs(mesh, extension, what);
-    const decoded = await this._timed(what, () => SegmorphDecoder.decodeTargetsAsync(stream, positions, indices));
+    const decoded = await this._named(what, () => SegmorphDecoder.decodeTargetsAsync(stream, positions, indices));
     const count = mesh.morphTargetManager?.numTargets ?? 0;
     if (decoded.targetCount !== count) throw new Error(`${what}: the stream holds ${decoded.targetCount} targets, the primitive has ${count}`);
     const floats = positions.length, baseNormals = mesh.getVerticesData(VertexBuffer.NormalKind, false, true);
@@ -211,18 +206,14 @@ export class SegmorphExtension {
     if (this.options.playback === 'gpu') {
       let model = null;
       try {
-        model = await this._timed(what, () => SegmorphDecoder.decodeModelAsync(stream, positions, indices));
+        model = await this._named(what, () => SegmorphDecoder.decodeModelAsync(stream, positions, indices));
       } catch (error) {
         if (!error.unsupported) throw error;  // damaged: reject; versions 1-3: morph targets below
       }
       const unplayable = model && gpuUnplayable(scene, model, indices);
-      if (unplayable) {
-        fallback = unplayable;
-        this.fallbacks.push(`${what}: ${unplayable}: played as morph targets`);
-      }
+      if (unplayable) fallback = unplayable;
       if (model && !unplayable) {
         checkClips(model.clipFrames, extension, times.map((t) => t.length), what);
-        this.playbacks.push({ what, mode: 'gpu', version: model.version });
         const normals = this.options.normals && mesh.getVerticesData(VertexBuffer.NormalKind) !== null;
         let player = null;
         try {
@@ -236,9 +227,8 @@ export class SegmorphExtension {
         return;
       }
     }
-    const decoded = await this._timed(what, () => SegmorphDecoder.decodeStreamAsync(stream, positions, indices));
+    const decoded = await this._named(what, () => SegmorphDecoder.decodeStreamAsync(stream, positions, indices));
     checkClips(decoded.clips.map((c) => c.frameCount), extension, times.map((t) => t.length), what);
-    this.playbacks.push({ what, mode: 'morph', version: decoded.version });
     const floats = positions.length, baseNormals = mesh.getVerticesData(VertexBuffer.NormalKind, false, true);
     const normals = this.options.normals && baseNormals && new SurfaceNormals(positions, indices, baseNormals);
     // Every frame a target: at influence 1 on one target the position is that frame exactly.
@@ -304,8 +294,7 @@ uniform highp sampler2D segmorphParameters;
 uniform highp sampler2D segmorphClusters;
 uniform highp sampler2D segmorphCoefficients;
 uniform int segmorphCount;
-
-${MODEL_GLSL}
+${TEXEL_GLSL}${MODEL_GLSL}
 void main(void) {
   ivec2 at = ivec2(gl_FragCoord.xy);
   int v = at.y * textureSize(segmorphVertices, 0).x + at.x;
@@ -327,25 +316,11 @@ uniform highp sampler2D segmorphTriangles;
 attribute vec3 segmorphSurface;
 attribute vec2 segmorphRing;
 #endif
-vec4 segmorphTexel(highp sampler2D map, int i) {
-  int width = textureSize(map, 0).x;
-  return texelFetch(map, ivec2(i % width, i / width), 0);
-}
+${TEXEL_GLSL}
 #ifdef SEGMORPH_NORMALS
+${TURN_GLSL}
 vec3 segmorphNormal(vec3 n) {
-  vec3 now = vec3(0.0);
-  int first = int(segmorphRing.x), count = int(segmorphRing.y);
-  for (int i = 0; i < count; ++i) {
-    ivec3 t = ivec3(segmorphTexel(segmorphTriangles, first + i).xyz);
-    vec3 a = segmorphTexel(segmorphShape, t.x).xyz;
-    now += cross(segmorphTexel(segmorphShape, t.y).xyz - a, segmorphTexel(segmorphShape, t.z).xyz - a);
-  }
-  float size = length(now);
-  if (size > 0.0) now /= size;
-  vec3 c = cross(segmorphSurface, now);
-  float cosine = dot(segmorphSurface, now);
-  if (cosine > -0.999999) n = n * cosine + cross(c, n) + c * (dot(c, n) / (1.0 + cosine));
-  return n;
+  return segmorphTurn(n, segmorphSurface, int(segmorphRing.x), int(segmorphRing.y));
 }
 #endif
 `;

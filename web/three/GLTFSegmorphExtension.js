@@ -33,7 +33,7 @@ import {
 
 import { NAME, checkClips, trackLayout } from '../gltf_extension.js';
 import { SegmorphDecoder } from '../segmorph_decoder.js';
-import { MODEL_GLSL, blendParameters, surfaceRings, textureWidth } from '../model_playback.js';
+import { MODEL_GLSL, TEXEL_GLSL, TURN_GLSL, blendParameters, surfaceRings, textureWidth } from '../model_playback.js';
 import { SurfaceNormals } from '../surface_normals.js';
 
 
@@ -330,7 +330,7 @@ in uvec4 segmorphCluster;
 in vec4 segmorphWeight;
 in uint segmorphCoefficient;
 
-${MODEL_GLSL}
+${TEXEL_GLSL}${MODEL_GLSL}
 vec3 segmorphPosition( vec3 x ) {
 	return segmorphEvaluate( x, ivec4( segmorphCluster ), segmorphWeight, int( segmorphCoefficient ) );
 }
@@ -346,20 +346,9 @@ uniform highp sampler2D segmorphShape;
 uniform highp sampler2D segmorphTriangles;
 in vec3 segmorphSurface;
 in uvec2 segmorphRing;
-
+${TURN_GLSL}
 vec3 segmorphNormal( vec3 n ) {
-	vec3 now = vec3( 0.0 );
-	for ( int i = 0; i < int( segmorphRing.y ); ++ i ) {
-		ivec3 t = ivec3( segmorphTexel( segmorphTriangles, int( segmorphRing.x ) + i ).xyz );
-		vec3 a = segmorphTexel( segmorphShape, t.x ).xyz;
-		now += cross( segmorphTexel( segmorphShape, t.y ).xyz - a, segmorphTexel( segmorphShape, t.z ).xyz - a );
-	}
-	float size = length( now );
-	if ( size > 0.0 ) now /= size;
-	vec3 c = cross( segmorphSurface, now );
-	float cosine = dot( segmorphSurface, now );
-	if ( cosine > -0.999999 ) n = n * cosine + cross( c, n ) + c * ( dot( c, n ) / ( 1.0 + cosine ) );
-	return n;
+	return segmorphTurn( n, segmorphSurface, int( segmorphRing.x ), int( segmorphRing.y ) );
 }
 `;
 
