@@ -13,19 +13,22 @@
 #include <memory>
 #include <string>
 
-#include "codec.h"
-#include "diffusion.h"
+#include "common/reconstruction.h"
+#include "common/stream.h"
+#include "common/topology.h"
+#include "decode/frame_decoder.h"
+#include "decode/stream_reader.h"
+#include "encode/encoder.h"
+#include "encode/motion.h"
+#include "encode/rate_control.h"
+#include "encode/segmentation/diffusion.h"
+#include "encode/segmentation/segmentation.h"
+#include "encode/stream_writer.h"
 #include "gltf_io.h"
-#include "motion.h"
-#include "rate_control.h"
-#include "reconstruction.h"
 #include "sample.h"
 #include "sample_first_animated.h"
-#include "segmentation.h"
 #include "segmorph/decoder_c.h"
 #include "stand_in_base.h"
-#include "stream.h"
-#include "topology.h"
 
 using namespace segmorph;
 

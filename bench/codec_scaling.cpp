@@ -28,9 +28,10 @@
 #include <map>
 #include <string>
 
-#include "codec.h"
+#include "decode/frame_decoder.h"
 #include "draco_base_mesh.h"
-#include "metrics.h"
+#include "encode/encoder.h"
+#include "encode/metrics.h"
 #include "stand_in_base.h"
 
 using namespace segmorph;

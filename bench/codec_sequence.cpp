@@ -14,9 +14,10 @@
 #include <cstring>
 #include <string>
 
-#include "codec.h"
+#include "decode/frame_decoder.h"
+#include "encode/encoder.h"
+#include "encode/metrics.h"
 #include "gltf_io.h"
-#include "metrics.h"
 #include "sample.h"
 #include "sample_first_animated.h"
 #include "stand_in_base.h"

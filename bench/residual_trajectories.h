@@ -8,11 +8,12 @@
 #include <cstdint>
 #include <vector>
 
-#include "codec.h"
-#include "reconstruction.h"
+#include "common/reconstruction.h"
+#include "common/stream.h"
+#include "decode/stream_reader.h"
+#include "encode/encoder.h"
 #include "sample_first_animated.h"
 #include "stand_in_base.h"
-#include "stream.h"
 
 namespace segmorph::bench {
 

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <vector>
 
-#include "frame_sequence.h"
-#include "metrics.h"
+#include "common/frame_sequence.h"
+#include "encode/metrics.h"
 
 namespace segmorph::bench {
 

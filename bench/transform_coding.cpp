@@ -23,7 +23,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "range_coder.h"
+#include "common/range_coder.h"
+#include "decode/frame_decoder.h"
 #include "residual_trajectories.h"
 
 using namespace segmorph;

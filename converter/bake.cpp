@@ -6,8 +6,8 @@
 #include <map>
 
 #include "accessor.h"
-#include "normals.h"
-#include "topology.h"
+#include "common/topology.h"
+#include "decode/normals.h"
 
 namespace segmorph {
 namespace {

@@ -8,7 +8,7 @@
 #include "accessor.h"
 #include "bake.h"
 #include "correspondence.h"
-#include "parallel.h"
+#include "encode/parallel.h"
 
 namespace segmorph {
 namespace {

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "metrics.h"
+#include "encode/metrics.h"
 #include "sample.h"
 #include "segmorph/status.h"
 

@@ -9,8 +9,8 @@
 
 #include <tiny_gltf.h>
 
-#include "codec.h"
 #include "draco_base_mesh.h"
+#include "encode/encoder.h"
 #include "sample.h"
 #include "segmorph/segmorph.h"
 #include "segmorph/status.h"

@@ -6,7 +6,7 @@
 #include <limits>
 #include <unordered_map>
 
-#include "parallel.h"
+#include "encode/parallel.h"
 
 namespace segmorph {
 namespace {

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "frame_sequence.h"
+#include "common/frame_sequence.h"
 
 namespace segmorph {
 

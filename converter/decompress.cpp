@@ -6,14 +6,14 @@
 
 #include "accessor.h"
 #include "bake.h"
+#include "common/stream_format.h"
+#include "common/topology.h"
 #include "compressed.h"
-#include "normals.h"
-#include "parallel.h"
+#include "decode/normals.h"
+#include "encode/parallel.h"
 #include "primitive_encoding.h"
 #include "segmorph/decoder.h"
 #include "segmorph_extension.h"
-#include "stream_format.h"
-#include "topology.h"
 #include "tracks.h"
 
 namespace segmorph {

@@ -9,10 +9,10 @@
 
 #include "bake.h"
 #include "comparison.h"
+#include "encode/rate_target.h"
 #include "gltf_io.h"
 #include "kept_skins.h"
 #include "moving_meshes.h"
-#include "rate_target.h"
 #include "segmorph_extension.h"
 #include "tracks.h"
 

@@ -7,7 +7,7 @@
 
 #include "comparison.h"
 #include "compressed.h"
-#include "rate_target.h"
+#include "encode/rate_target.h"
 #include "sample.h"
 #include "tracks.h"
 

@@ -5,7 +5,7 @@
 
 #include <tiny_gltf.h>
 
-#include "codec.h"
+#include "encode/encoder.h"
 #include "pipeline.h"
 #include "segmorph/status.h"
 

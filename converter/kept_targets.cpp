@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "compressed.h"
-#include "metrics.h"
+#include "encode/metrics.h"
 #include "primitive_encoding.h"
 #include "segmorph_extension.h"
 

@@ -9,7 +9,7 @@
 #include "accessor.h"
 #include "animation.h"
 #include "compressed.h"
-#include "parallel.h"
+#include "encode/parallel.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {

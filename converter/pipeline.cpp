@@ -7,12 +7,12 @@
 #include <cstring>
 
 #include "bake.h"
+#include "common/topology.h"
 #include "comparison.h"
 #include "compressed.h"
 #include "encode.h"
 #include "gltf_io.h"
 #include "output_file.h"
-#include "topology.h"
 
 namespace segmorph {
 

@@ -4,9 +4,10 @@
 #include <chrono>
 #include <cmath>
 
+#include "common/vertex_gather.h"
 #include "compressed.h"
-#include "metrics.h"
-#include "vertex_gather.h"
+#include "decode/frame_decoder.h"
+#include "encode/metrics.h"
 
 namespace segmorph {
 namespace {

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "accessor.h"
-#include "codec.h"
 #include "draco_base_mesh.h"
-#include "rate_target.h"
+#include "encode/encoder.h"
+#include "encode/rate_target.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "animation.h"
-#include "frame_sequence.h"
+#include "common/frame_sequence.h"
 #include "segmorph/segmorph.h"  // SampleSettings
 #include "segmorph/status.h"
 

@@ -6,9 +6,11 @@
 
 #include "accessor.h"
 #include "animation.h"
+#include "common/track_set.h"
+#include "decode/track_decoder.h"
+#include "encode/track_encoder.h"
 #include "segmorph/decoder.h"
 #include "segmorph_extension.h"
-#include "track_coding.h"
 
 namespace segmorph {
 namespace {

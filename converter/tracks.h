@@ -1,4 +1,4 @@
-// A file's keyframe animation coded with the track stream of SEGMORPH_animation_compression (codec/track_coding.h,
+// A file's keyframe animation coded with the track stream of SEGMORPH_animation_compression (codec/common/track_set.h,
 // spec/tracks.md): per animation, one stream holds its LINEAR and STEP samplers of node translation, rotation
 // and scale; their accessors stay in the JSON without data, and the stream fills them.
 #pragma once

@@ -1,5 +1,6 @@
 // The codec end to end: closed loop, determinism, lossless, rate control, several clips, hostile streams.
-#include "codec.h"
+#include "decode/frame_decoder.h"
+#include "encode/encoder.h"
 
 #include <gtest/gtest.h>
 
@@ -11,12 +12,14 @@
 #include <thread>
 #include <utility>
 
+#include "common/stream.h"
+#include "common/stream_format.h"
+#include "decode/stream_reader.h"
+#include "encode/metrics.h"
+#include "encode/stream_writer.h"
 #include "fuzz/fuzz_base_mesh.h"
 #include "gltf_io.h"
-#include "metrics.h"
 #include "sample.h"
-#include "stream.h"
-#include "stream_format.h"
 #include "test_files.h"
 #include "test_meshes.h"
 

@@ -11,11 +11,14 @@
 #include <thread>
 #include <vector>
 
-#include "codec.h"
+#include "common/track_set.h"
+#include "decode/frame_decoder.h"
+#include "decode/track_decoder.h"
+#include "encode/encoder.h"
+#include "encode/track_encoder.h"
 #include "segmorph/decoder.h"
 #include "segmorph/decoder_c.h"
 #include "test_meshes.h"
-#include "track_coding.h"
 
 namespace segmorph {
 namespace {

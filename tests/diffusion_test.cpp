@@ -1,10 +1,10 @@
-#include "diffusion.h"
+#include "encode/segmentation/diffusion.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "laplacian.h"
+#include "encode/segmentation/laplacian.h"
 #include "test_meshes.h"
 
 namespace segmorph {

@@ -1,4 +1,4 @@
-#include "eigensolver.h"
+#include "encode/segmentation/eigensolver.h"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "laplacian.h"
-#include "topology.h"
+#include "common/topology.h"
+#include "encode/segmentation/laplacian.h"
 
 #include "test_meshes.h"
 

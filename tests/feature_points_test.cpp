@@ -1,4 +1,4 @@
-#include "feature_points.h"
+#include "encode/segmentation/feature_points.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Frame references (stream version 3, codec/frame_references.h): the encoder gives a frame an earlier reference than
+// Frame references (stream version 3, codec/encode/frame_references.h): the encoder gives a frame an earlier reference than
 // the previous one where the motion repeats itself, keeps them only when they pay, and every way of decoding (whole
 // clips, one frame or two at a time, after a seek) gives the encoder's frames; the decoder refuses references a
 // stream may not hold. The other tools of version 3 too: the motion's and the weights' contexts.
@@ -9,10 +9,12 @@
 #include <map>
 #include <string>
 
-#include "frame_decoder.h"
-#include "range_coder.h"
-#include "stream.h"
-#include "stream_format.h"
+#include "common/range_coder.h"
+#include "common/stream.h"
+#include "common/stream_format.h"
+#include "decode/frame_decoder.h"
+#include "decode/stream_reader.h"
+#include "encode/stream_writer.h"
 #include "test_meshes.h"
 
 namespace segmorph {

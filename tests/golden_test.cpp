@@ -21,14 +21,16 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/float_bits.h"
+#include "common/stream_format.h"
+#include "common/track_format.h"
+#include "common/track_set.h"
 #include "compressed.h"
-#include "float_bits.h"
+#include "decode/track_decoder.h"
+#include "encode/track_encoder.h"
 #include "gltf_io.h"
 #include "sample.h"
-#include "stream_format.h"
 #include "test_files.h"
-#include "track_coding.h"
-#include "track_format.h"
 
 namespace segmorph {
 namespace {

@@ -1,4 +1,4 @@
-#include "laplacian.h"
+#include "encode/segmentation/laplacian.h"
 
 #include <gtest/gtest.h>
 

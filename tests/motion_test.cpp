@@ -1,4 +1,4 @@
-#include "motion.h"
+#include "encode/motion.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <cstring>
 #include <random>
 
-#include "metrics.h"
+#include "encode/metrics.h"
 
 namespace segmorph {
 namespace {

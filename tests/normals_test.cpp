@@ -1,4 +1,4 @@
-#include "normals.h"
+#include "decode/normals.h"
 
 #include <gtest/gtest.h>
 

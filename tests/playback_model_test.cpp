@@ -1,5 +1,5 @@
 // The model of a version-4 stream through the runtime API (segmorph_decoder_model_*, AnimationDecoder::model_*;
-// codec/playback_model.h): its arrays in the documented shapes, its float32 evaluation at every frame's parameters
+// codec/decode/playback_model.h): its arrays in the documented shapes, its float32 evaluation at every frame's parameters
 // against the decoded frames, blends of parameters against blends of frames, the bounds against every frame, and
 // versions 1 to 3, bad arguments and a closed decoder refused with their statuses.
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "codec.h"
+#include "encode/encoder.h"
 #include "segmorph/decoder.h"
 #include "segmorph/decoder_c.h"
 #include "test_meshes.h"

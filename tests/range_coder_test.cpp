@@ -1,4 +1,4 @@
-#include "range_coder.h"
+#include "common/range_coder.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,8 @@
 #include <memory>
 #include <vector>
 
-#include "residual_coding.h"
+#include "decode/residual_decoder.h"
+#include "encode/residual_encoder.h"
 
 namespace segmorph {
 namespace {
@@ -995,7 +996,7 @@ TEST(RangeCoderHostile, ByteFlipsDecodeLikeTheSpecificationWithoutCrashing) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
-// Residual symbols (spec section 8; codec/residual_coding.h).
+// Residual symbols (spec section 8; codec/common/residual_contexts.h).
 
 // Residuals like a stream's: mostly 0 and ±1, some small, a few large, whole vertices at rest for stretches; the
 // extremes of int32 (lossy) or of int64 (lossless, which escapes what does not fit int32).

@@ -1,11 +1,11 @@
-#include "refinement.h"
+#include "encode/segmentation/refinement.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "curvature.h"
-#include "laplacian.h"
+#include "encode/segmentation/curvature.h"
+#include "encode/segmentation/laplacian.h"
 #include "test_meshes.h"
 
 namespace segmorph {

@@ -1,4 +1,4 @@
-#include "segmentation.h"
+#include "encode/segmentation/segmentation.h"
 
 #include <gtest/gtest.h>
 

@@ -10,11 +10,13 @@
 #include <cstring>
 #include <string>
 
-#include "codec.h"
-#include "stream.h"
-#include "stream_format.h"
+#include "common/stream.h"
+#include "common/stream_format.h"
+#include "decode/frame_decoder.h"
+#include "decode/stream_reader.h"
+#include "decode/transform_residuals.h"
+#include "encode/stream_writer.h"
 #include "test_files.h"
-#include "transform_residuals.h"
 
 namespace segmorph {
 namespace {

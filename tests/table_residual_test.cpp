@@ -1,4 +1,4 @@
-// The table residual code of stream version 2 (codec/table_residual_coding.h, CodecSettings::table_residuals): the
+// The table residual code of stream version 2 (codec/common/table_residual_format.h, CodecSettings::table_residuals): the
 // closed loop, determinism, the version byte and flag, residual symbols written and read back, the frame bound, and
 // hostile streams (every refusal bad_data in one line, never a crash).
 #include <gtest/gtest.h>
@@ -13,13 +13,18 @@
 #include <random>
 #include <string>
 
-#include "codec.h"
-#include "float_bits.h"
-#include "metrics.h"
-#include "range_coder.h"
-#include "stream.h"
-#include "stream_format.h"
-#include "table_residual_coding.h"
+#include "common/float_bits.h"
+#include "common/range_coder.h"
+#include "common/stream.h"
+#include "common/stream_format.h"
+#include "common/table_residual_format.h"
+#include "decode/frame_decoder.h"
+#include "decode/stream_reader.h"
+#include "decode/table_residual_decoder.h"
+#include "encode/encoder.h"
+#include "encode/metrics.h"
+#include "encode/stream_writer.h"
+#include "encode/table_residual_encoder.h"
 #include "test_meshes.h"
 
 namespace segmorph {
@@ -527,14 +532,14 @@ TEST(TableResidualsHostile, EveryChangedSymbolWordIsRefused) {
   }
 }
 
-int bits_for(uint32_t count) {  // as codec/stream.cpp
+int bits_for(uint32_t count) {  // as codec/common/stream_syntax.h
   int bits = 0;
   while (bits < 32 && (uint64_t(1) << bits) < count) ++bits;
   return bits;
 }
 
 // The stream write_stream makes of `content` up to its residual steps, written here model by model (a mirror of
-// codec/stream.cpp for a base without two identical positions), then what `rest` codes into the body, then the bytes
+// codec/encode/stream_writer.cpp for a base without two identical positions), then what `rest` codes into the body, then the bytes
 // `rest` returns after it. For table streams whose body holds what write_stream never writes.
 std::vector<uint8_t> hand_written(const StreamContent& c,
                                   const std::function<std::vector<uint8_t>(RangeEncoder&)>& rest) {

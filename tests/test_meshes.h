@@ -10,9 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include "codec.h"
-#include "frame_sequence.h"
-#include "metrics.h"
+#include "common/frame_sequence.h"
+#include "encode/encoder.h"
+#include "encode/metrics.h"
 
 namespace segmorph::testing {
 

@@ -1,4 +1,4 @@
-#include "topology.h"
+#include "common/topology.h"
 
 #include <gtest/gtest.h>
 

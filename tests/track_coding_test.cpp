@@ -1,7 +1,9 @@
-// The track stream (codec/track_coding.h, spec/tracks.md): accuracy of each path, exact times, the decoder's
+// The track stream (codec/encode/track_encoder.h, codec/decode/track_decoder.h, spec/tracks.md): accuracy of each path, exact times, the decoder's
 // agreement with the encoder, determinism, the step grid and its limits, layouts that disagree, hostile bytes, and
 // what the encoder's choices (rotation components rebuilt, prediction order) are worth on smooth tracks.
-#include "track_coding.h"
+#include "common/track_set.h"
+#include "decode/track_decoder.h"
+#include "encode/track_encoder.h"
 
 #include <gtest/gtest.h>
 
@@ -10,9 +12,8 @@
 #include <cstring>
 #include <random>
 
-#include "range_coder.h"
-#include "track_coding_internal.h"
-#include "track_format.h"
+#include "common/range_coder.h"
+#include "common/track_format.h"
 
 namespace segmorph {
 namespace {

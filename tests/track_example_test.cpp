@@ -13,8 +13,10 @@
 #include <sstream>
 #include <string>
 
+#include "common/track_set.h"
+#include "decode/track_decoder.h"
+#include "encode/track_encoder.h"
 #include "test_files.h"
-#include "track_coding.h"
 
 namespace segmorph {
 namespace {

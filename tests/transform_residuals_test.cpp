@@ -1,15 +1,18 @@
-// Stream version 4: the residuals as temporal bases and coefficients (codec/transform_coding.h, the encoder's side;
-// codec/transform_residuals.h, the decoder's; spec/bitstream.md 5.9 and 8.7.1).
-#include "transform_residuals.h"
+// Stream version 4: the residuals as temporal bases and coefficients (codec/encode/transform_coding.h, the encoder's side;
+// codec/decode/transform_residuals.h, the decoder's; spec/bitstream.md 5.9 and 8.7.1).
+#include "decode/transform_residuals.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
-#include "codec.h"
-#include "frame_decoder.h"
-#include "stream.h"
-#include "stream_format.h"
+#include "common/stream.h"
+#include "common/stream_format.h"
+#include "decode/frame_decoder.h"
+#include "decode/stream_reader.h"
+#include "encode/encoder.h"
+#include "encode/stream_writer.h"
+#include "encode/transform_symbols.h"
 #include "test_meshes.h"
 
 namespace segmorph {

@@ -8,9 +8,9 @@
 #include <fstream>
 
 #include "cache_files.h"
+#include "encode/metrics.h"
 #include "gltf_builder.h"
 #include "gltf_io.h"
-#include "metrics.h"
 #include "obj_reader.h"
 #include "pipeline.h"
 #include "test_files.h"

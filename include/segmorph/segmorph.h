@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "segmorph/encoding.h"  // RateMode, StreamReport
 #include "segmorph/status.h"
 #include "segmorph/version.h"
 
@@ -156,12 +157,6 @@ Status bake(Model& model, const SampleSettings& settings, BakeReport* report = n
 
 // --- encode ---
 
-enum class RateMode {
-  error,     // target: KG error in percent
-  bpvf,      // target: bits per vertex per frame of the whole output
-  lossless,  // restore the input floats bit for bit
-};
-
 struct EncodeSettings {
   RateMode mode = RateMode::error;
   double target = 0.15;  // KG % (error) or bits per vertex per frame of the whole file (bpvf)
@@ -192,22 +187,6 @@ struct EncodeSettings {
   // rate control, the comparison with the input); 0: every hardware thread. The output is the same bytes for every
   // number.
   size_t threads = 0;
-};
-
-// One animation stream of a primitive coded as frames or kept targets, as the codec made it.
-struct StreamReport {
-  int mesh = -1, primitive = -1;  // the primitive of the encoded file it animates
-  size_t clusters = 0;      // K
-  double e_pi_morse = 0;    // E(Π) of the Morse segmentation before merging to K and refinement (paper, Table 2)
-  double e_pi = 0;          // E(Π) of the final clusters
-  int curvature_refinement_passes = 0;   // passes of the concavity refinement of the Morse levels (Eq. 6)
-  bool curvature_refined = false;        // the clusters were merged from the refined levels (Eq. 6)
-  int motion_refinement_iterations = 0;  // rounds of moving boundary vertices to the clusters that predict them best
-  double residual_steps[3] = {0, 0, 0};
-  double kg_percent = 0;  // of the encoder's own reconstruction (of the animation it plays, for kept targets)
-  size_t bytes_motion = 0, bytes_residuals = 0, bytes_total = 0;
-  // Milliseconds per stage.
-  double ms_segmentation = 0, ms_motion = 0, ms_prediction = 0, ms_rate_control = 0, ms_entropy = 0;
 };
 
 // One animated primitive of an original file, measured against the primitive of another file that plays it (verify),

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "codec.h"
+#include "decode/frame_decoder.h"
 #include "fuzz_base_mesh.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

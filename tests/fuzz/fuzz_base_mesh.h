@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "frame_sequence.h"
 #include "../test_meshes.h"
+#include "common/frame_sequence.h"
 
 namespace segmorph::fuzz {
 

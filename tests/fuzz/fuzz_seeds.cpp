@@ -14,10 +14,13 @@
 #include <string>
 #include <vector>
 
-#include "codec.h"
+#include "common/stream.h"
+#include "common/stream_format.h"
+#include "decode/frame_decoder.h"
+#include "decode/stream_reader.h"
+#include "encode/encoder.h"
+#include "encode/stream_writer.h"
 #include "fuzz_base_mesh.h"
-#include "stream.h"
-#include "stream_format.h"
 
 namespace segmorph::fuzz {
 namespace {

@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "track_coding.h"
+#include "common/track_set.h"
 
 namespace segmorph::fuzz {
 

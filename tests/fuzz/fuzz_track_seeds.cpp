@@ -13,9 +13,10 @@
 #include <string>
 #include <vector>
 
+#include "common/track_set.h"
+#include "decode/track_decoder.h"
+#include "encode/track_encoder.h"
 #include "fuzz_track_layout.h"
-#include "track_coding.h"
-#include "track_coding_internal.h"
 
 namespace segmorph::fuzz {
 namespace {

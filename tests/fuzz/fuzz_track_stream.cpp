@@ -7,8 +7,9 @@
 #include <cstdlib>
 #include <string>
 
+#include "common/track_set.h"
+#include "decode/track_decoder.h"
 #include "fuzz_track_layout.h"
-#include "track_coding.h"
 
 namespace {
 

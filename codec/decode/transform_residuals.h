@@ -1,0 +1,64 @@
+// Version 4's residuals (spec/bitstream.md, 5.9 and 8.7.1): each cluster's residuals over all frames as m temporal
+// basis vectors and, per welded vertex and axis, m coefficients: the residual of frame f is the sum over i of
+// coefficient i times entry f of vector i. The decoder's side (no Eigen): the coefficients from the stream's symbols,
+// and the residuals of a frame from the coefficients; the encoder (transform_coding.h) uses the same functions, so
+// that the error it measures is the decoder's.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "common/reconstruction.h"
+#include "common/stream.h"
+#include "segmorph/status.h"
+
+namespace segmorph {
+
+// The coefficients' indices of every welded vertex: vertex w's m × 3 (m its cluster's basis size), axis by axis,
+// vector by vector, at values[offset[w] ..]: coefficient i of axis a at values[offset[w] + a × m + i].
+struct TransformCoefficients {
+  std::vector<uint64_t> offset;  // W + 1
+  std::vector<int32_t> values;
+};
+
+// The offsets alone (values sized, zero) for the content's labels and basis sizes.
+TransformCoefficients transform_layout(const StreamContent& content);
+
+// The coefficients from content.coefficient_symbols: in traversal order, each coefficient is its symbol plus the
+// mean of the same coefficient of the vertex's earlier neighbours in its cluster (spec 8.7.1), rounded to the nearest
+// integer, halves away from zero (0 without such a neighbour). Fails when a coefficient lies outside
+// ±format::kMaxTransformValue.
+Status transform_coefficients(const StreamContent& content, const ResidualTraversal& traversal,
+                              TransformCoefficients& coefficients);
+
+// The residuals of any frame, from the coefficients and the bases (the content must outlive it). It takes the
+// coefficients over and keeps their offsets and their products with the steps (8 bytes each), not their indices.
+class TransformResiduals {
+ public:
+  TransformResiduals(const StreamContent& content, TransformCoefficients coefficients);
+
+  // Frame `frame`'s residuals, W × 3 doubles (vertex w, axis a at w × 3 + a): for each, r = 0.0, then for i = 0 ..
+  // m − 1, r = r + (double(q_i) × double(D)) × b_i(f), b_i(f) = double(entry) × double(step) of the vector (both
+  // products computed once, the same doubles).
+  void frame(size_t frame, double* out) const;
+
+  // What frame() reads. Vertex w's scaled coefficients are scaled()[offsets()[w] + a × m + i] (axis a, vector i);
+  // the stream's basis value of vector i in frame f is stream_values()[f × G + i] (G its vectors), cluster k's own
+  // (kBasisOwn) own_values(k)[f × m + i].
+  const std::vector<uint64_t>& offsets() const { return offset_; }
+  const std::vector<double>& scaled() const { return scaled_; }
+  const std::vector<double>& stream_values() const { return stream_; }
+  const std::vector<double>& own_values(size_t cluster) const { return own_[cluster]; }
+
+ private:
+  const StreamContent& content_;
+  std::vector<uint64_t> offset_;  // TransformCoefficients::offset
+  size_t frames_;
+  // The bases' values frame by frame: the stream's F × G (frame f's at stream_[f × G ..]), each own cluster's F × m.
+  std::vector<double> stream_;
+  std::vector<std::vector<double>> own_;
+  std::vector<double> scaled_;  // double(q) × double(D) of every coefficient, laid out by offset_
+};
+
+}  // namespace segmorph

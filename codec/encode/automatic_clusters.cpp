@@ -1,0 +1,193 @@
+#include "encode/automatic_clusters.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "common/stream_format.h"
+#include "encode/motion_quantization.h"
+#include "encode/rate_control.h"
+#include "encode/segmentation/refinement.h"
+#include "encode/segmentation/segmentation.h"
+#include "encode/stream_writer.h"
+
+namespace segmorph {
+namespace {
+
+// The largest candidate is the segmentation's own count, at most one cluster per kVerticesPerCluster welded vertices
+// and kMaxClusters; the smallest is kMinAutomaticClusters. Lossless streams, whose size the residuals dominate, use
+// kLosslessClusters.
+constexpr size_t kVerticesPerCluster = 24;
+constexpr size_t kMaxClusters = 256;
+constexpr size_t kMinAutomaticClusters = 4;
+constexpr size_t kLosslessClusters = 24;
+// The frames the automatic K is estimated on: windows of kSampleWindow frames every kSampleStride frames (all frames
+// when there are at most twice kSampleStride), and the motion refinement iterations of each candidate.
+constexpr size_t kSampleWindow = 8;
+constexpr size_t kSampleStride = 32;
+constexpr int kSampleRefinements = 4;
+
+// The frames candidates are costed on: windows of the trajectories, each coded as a clip of its own.
+struct Sample {
+  Trajectories frames;
+  std::vector<uint32_t> clip_frames;
+  double share = 0;  // of all the frames
+};
+
+Sample sample_frames(const EncodeProblem& problem) {
+  Sample sample;
+  sample.frames.vertex_count = problem.welded;
+  const size_t welded = problem.welded;
+  const bool sampled = problem.frames_total > 2 * kSampleStride;
+  size_t first = 0;  // of the clip, in the trajectories
+  for (const FrameSequence& clip : problem.clips) {
+    const size_t stride = sampled ? kSampleStride : clip.frame_count;
+    for (size_t window = 0; window < clip.frame_count; window += stride) {
+      const size_t length = sampled ? std::min(clip.frame_count - window, kSampleWindow) : clip.frame_count;
+      const float* from = &problem.trajectories.positions[(first + window) * welded * 3];
+      sample.frames.positions.insert(sample.frames.positions.end(), from, from + length * welded * 3);
+      sample.frames.frame_count += length;
+      sample.clip_frames.push_back(uint32_t(length));
+    }
+    first += clip.frame_count;
+  }
+  sample.share = double(sample.frames.frame_count) / double(problem.frames_total);
+  return sample;
+}
+
+// The cost of a candidate segmentation, smaller is better: with an error target, the estimated stream bits at the
+// target distortion; with a rate target, the estimated log distortion at the target size. It is measured on a sample
+// of the frames so that the search costs about a quarter of one full pass: the clusters refined by motion
+// (kSampleRefinements iterations), motion quantized at the expected step, weights fitted, then the closed-loop
+// residual rate and distortion at two residual steps (the expected one and twice it, on every axis), interpolated in
+// log distortion.
+class CandidateCost {
+ public:
+  CandidateCost(const EncodeProblem& problem, const StreamContent& content)
+      : problem_(problem), content_(content), sample_(sample_frames(problem)) {}
+
+  double operator()(const Clusters& merged, uint8_t flags) const {
+    const EncodeProblem& p = problem_;
+    report_progress(p.settings, "cluster count: trying " + std::to_string(merged.count) + " clusters");
+    const Clusters candidate = refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency,
+                                                kSampleRefinements, nullptr, p.settings.threads);
+    StreamContent trial = content_;
+    trial.flags = flags;
+    trial.clip_frames = sample_.clip_frames;
+    trial.cluster_count = uint32_t(candidate.count);
+    trial.labels = candidate.label;
+    const AffineMotion motion = fit_affine_motion(p.base_welded.data(), sample_.frames, candidate, p.settings.threads);
+    const double motion_step = kMotionStepRatio * p.mean_step;
+    quantize_motion_and_weights(motion, motion_step / cluster_radius(p.base_welded, motion.centroid, candidate.label),
+                                motion_step, p.base_welded, sample_.frames, candidate, p.adjacency,
+                                p.settings.blend_weights, trial);
+    const FramePredictions trial_predictions(trial, p.base_welded);
+    const std::vector<double> steps = {p.mean_step, 2 * p.mean_step};
+    SubbandCurve measured[3];
+    measure_subbands(trial, p.traversal, trial_predictions, sample_.frames.positions, p.multiplicity,
+                     {steps, steps, steps}, measured, p.settings.threads);
+    std::vector<uint8_t> side;
+    write_stream(trial, p.base, side);
+    double distortion[2], bits[2];
+    for (int j = 0; j < 2; ++j) {
+      distortion[j] =
+          std::max(measured[0].distortion[j] + measured[1].distortion[j] + measured[2].distortion[j], 1e-300);
+      bits[j] = 8.0 * double(side.size()) + measured[0].bits[j] + measured[1].bits[j] + measured[2].bits[j];
+    }
+    if (p.settings.mode == RateMode::error) {
+      const double t =
+          std::log(sample_.share * p.max_distortion() / distortion[0]) / std::log(distortion[1] / distortion[0]);
+      return bits[0] + t * (bits[1] - bits[0]);
+    }
+    const double budget = sample_.share * (p.settings.target * double(p.vertex_count) * double(p.frames_total) -
+                                           8.0 * double(p.settings.outside_bytes));
+    const double t = (budget - bits[0]) / (bits[1] - bits[0]);
+    return std::log(distortion[0]) + t * (std::log(distortion[1]) - std::log(distortion[0]));
+  }
+
+ private:
+  const EncodeProblem& problem_;
+  const StreamContent& content_;
+  const Sample sample_;
+};
+
+// Automatic K: more clusters cost motion side information and save residual bits. Candidates from the
+// segmentation's own count down by factors of 2/3, each merged from the segmentation; the search stops at the first
+// candidate that costs more than the one before. Then the geometric means of the best and its tried neighbours: the
+// cost is not smooth in K, and a step of 2/3 missed K worth 7 % (Fox, 6 for 9). `best_cost` receives the chosen K's
+// cost.
+Clusters automatic_count(const EncodeProblem& problem, const Clusters& morse, const CandidateCost& cost_of,
+                         uint8_t flags, double& best_cost) {
+  auto merged = [&](size_t k) {
+    return merge_clusters(morse, k, problem.base_welded.data(), problem.trajectories, problem.adjacency);
+  };
+  const size_t largest =
+      std::max<size_t>(1, std::min({morse.count, problem.welded / kVerticesPerCluster, kMaxClusters}));
+  Clusters best = merged(largest);
+  best_cost = cost_of(best, flags);
+  size_t above = 0, below = 0;  // the tried counts next to the best one, 0 for none
+  for (size_t k = largest * 2 / 3, previous = best.count; k >= kMinAutomaticClusters; k = k * 2 / 3) {
+    Clusters candidate = merged(k);
+    const double cost = cost_of(candidate, flags);
+    if (!(cost < best_cost)) {
+      below = candidate.count;
+      break;
+    }
+    above = previous, previous = candidate.count;
+    best = std::move(candidate), best_cost = cost;
+  }
+  const size_t chosen = best.count;
+  for (size_t neighbour : {above, below}) {
+    const size_t k = size_t(std::lround(std::sqrt(double(neighbour) * double(chosen))));
+    if (neighbour == 0 || k == neighbour || k == chosen || k < kMinAutomaticClusters) continue;
+    Clusters candidate = merged(k);
+    const double cost = cost_of(candidate, flags);
+    if (cost < best_cost) best = std::move(candidate), best_cost = cost;
+  }
+  return best;
+}
+
+}  // namespace
+
+Clusters choose_clusters(const EncodeProblem& problem, const std::vector<Clusters>& segmentations,
+                         StreamContent& content, size_t* chosen) {
+  const CodecSettings& settings = problem.settings;
+  auto merged = [&](const Clusters& morse, size_t k) {
+    return merge_clusters(morse, k, problem.base_welded.data(), problem.trajectories, problem.adjacency);
+  };
+  if (chosen) *chosen = segmentations.size() - 1;
+  if (settings.mode == RateMode::lossless)
+    return merged(segmentations.back(), settings.clusters ? settings.clusters : kLosslessClusters);
+  const CandidateCost cost_of(problem, content);
+  double best_cost = 0;
+  Clusters clusters;
+  // The last (refined) segmentation first: an earlier one replaces it only when estimated strictly cheaper (a tie, or
+  // a cost that is not a number on a mesh of a few vertices, keeps the refined one).
+  for (size_t s = segmentations.size(); s-- > 0;) {
+    double cost;
+    Clusters candidate;
+    if (settings.clusters) {
+      candidate = merged(segmentations[s], settings.clusters);
+      cost = cost_of(candidate, content.flags);
+    } else {
+      candidate = automatic_count(problem, segmentations[s], cost_of, content.flags, cost);
+    }
+    if (s + 1 == segmentations.size() || cost < best_cost) {
+      best_cost = cost, clusters = std::move(candidate);
+      if (chosen) *chosen = s;
+    }
+  }
+  // Temporal and spatial residual prediction (when allowed) are kept when the estimate says they pay: temporal does
+  // for slow sequences, not always for fast ones; spatial does at higher rates, not always at low ones, where most
+  // residuals quantize to zero (docs/codec.md). The estimate is biased a little against temporal prediction (each
+  // sample window starts without a previous frame).
+  for (uint8_t prediction : {format::kFlagTemporalResiduals, format::kFlagSpatialResiduals}) {
+    if (!(content.flags & prediction)) continue;
+    const uint8_t without = uint8_t(content.flags & ~prediction);
+    const double cost = cost_of(clusters, without);
+    if (cost < best_cost) content.flags = without, best_cost = cost;
+  }
+  return clusters;
+}
+
+}  // namespace segmorph

@@ -1,0 +1,102 @@
+// The smallest eigenpairs of the Laplace–Beltrami operator: K φ = λ M φ (K stiffness, M = diag(mass),
+// from laplacian.h), whole mesh or per connected component.
+//
+// Large problems use Spectra's Lanczos solver in shift-invert mode, (K − σM)⁻¹ M φ = φ / (λ − σ), with
+// the linear solves by a sparse Cholesky factorization (LDLᵀ) of K − σM. K is singular (constants are in
+// its kernel), so the shift is slightly negative: K − σM is then positive definite, and the eigenvalues
+// nearest σ are exactly the smallest ones. Small problems use a dense generalized solver, which is
+// faster there and has no restriction on how many pairs are asked for.
+//
+// A mesh with C connected components has C zero eigenvalues, and its eigenvectors can mix components
+// arbitrarily; heat-kernel distances are meaningful only within a component, so the spectral stage
+// works per component (component_spectra).
+//
+// This file is the only one that sees Spectra; its exceptions become a Status here.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/topology.h"
+#include "encode/segmentation/laplacian.h"
+#include "segmorph/status.h"
+
+namespace segmorph {
+
+struct Eigenpairs {
+  // n eigenvalues λ, ascending, in 1/(units of the positions)². K is positive semidefinite, so values
+  // below 0 can only be rounding and are returned as 0; the first value of a connected mesh is 0 up to
+  // rounding (below 1e-10 of the next one in the tests) with a constant eigenvector.
+  Eigen::VectorXd values;
+  // W × n, column-major, column i the eigenvector φ_i of values[i]. M-orthonormal: ΦᵀMΦ = I.
+  // Deterministic sign: in each column the entry of largest magnitude is positive (on exact ties the
+  // one of lowest index). Within a repeated eigenvalue the basis is whichever the solver found.
+  Eigen::MatrixXd vectors;
+};
+
+enum class EigenMethod {
+  automatic,     // dense up to EigenSettings::dense_limit vertices (or when count ≥ W/2), else shift_invert
+  dense,         // Eigen::GeneralizedSelfAdjointEigenSolver on dense W × W matrices: O(W³) time, O(W²) memory
+  shift_invert,  // Spectra Lanczos with sparse LDLᵀ solves; needs count < W − 1
+};
+
+struct EigenSettings {
+  EigenMethod method = EigenMethod::automatic;
+  size_t dense_limit = 300;  // vertices
+  // Spectra's convergence test: each Ritz value ν = 1/(λ − σ) has a residual below tolerance · |ν|.
+  double tolerance = 1e-10;
+  int max_restarts = 1000;  // implicit restarts of the Lanczos iteration before giving up
+  // Told each step of the shift-invert search ("factorizing", "Lanczos iteration", ...); empty: nothing. The Lanczos
+  // iteration, whose length is not known ahead, also tells how many solves it has made, at most every
+  // `solve_report_seconds`.
+  std::function<void(const std::string& step)> progress;
+  double solve_report_seconds = 2;
+};
+
+// Shift of the shift-invert mode: σ = −kShiftAreaFraction / (Σ mass). The first nonzero eigenvalue of a
+// surface of area A is 8π/A for a sphere and about 0.1/A to 1/A for long thin shapes (a snake), so σ is
+// one to three orders of magnitude closer to 0 than λ₁: negative enough to make K − σM safely positive
+// definite (its condition number is about λ_max / |σ|, ~1e8 at 1e5 vertices), small enough to keep the
+// wanted eigenvalues well separated after the inversion.
+constexpr double kShiftAreaFraction = 1e-2;
+
+// The min(count, W) smallest eigenpairs of K φ = λ M φ. stiffness: W × W symmetric positive
+// semidefinite (CotangentLaplacian::stiffness); mass: W strictly positive entries.
+//
+// Lanczos may skip a copy of a repeated eigenvalue (exact multiplicities occur on symmetric meshes), so
+// the shift-invert result is verified by Sylvester's law of inertia (an LDLᵀ of K − τM counts the
+// eigenvalues below τ, τ in the gap before the last wanted cluster), and skipped pairs are searched
+// again with the found ones deflated. Values within 1e-3 (relative) of the last wanted value count as
+// one cluster: when `count` ends inside such a cluster, which of its members are returned is not
+// specified (they agree to 1e-3).
+//
+// Fails with numerical when the Lanczos iteration does not converge, K − σM cannot be factorized, or
+// skipped eigenvalues are still missing after a few deflated restarts; with invalid_argument when
+// shift_invert is forced with count ≥ W − 1.
+Status smallest_eigenpairs(const Eigen::SparseMatrix<double>& stiffness, const Eigen::VectorXd& mass, size_t count,
+                           Eigenpairs& out, const EigenSettings& settings = EigenSettings());
+
+struct ComponentSpectrum {
+  // n welded vertex indices of the component, ascending; vertices[local] is the welded vertex of local index.
+  std::vector<uint32_t> vertices;
+  // min(count, n) eigenpairs of the component's own operator; eigenvector rows are local indices.
+  Eigenpairs eigenpairs;
+};
+
+struct ComponentSpectra {
+  std::vector<ComponentSpectrum> components;  // topology.component_count, in component order
+  std::vector<uint32_t> local_index;          // W: the index of each welded vertex within its component
+};
+
+// The smallest eigenpairs of every connected component of `topology`, each from the rows and columns of
+// `laplacian` (built from the same welded vertices and triangles) that belong to it. A component's first
+// eigenvalue is 0 with a constant eigenvector; a component of one vertex has only that pair.
+Status component_spectra(const CotangentLaplacian& laplacian, const WeldedTopology& topology, size_t count,
+                         ComponentSpectra& out, const EigenSettings& settings = EigenSettings());
+
+}  // namespace segmorph

@@ -1,0 +1,64 @@
+#include "encode/segmentation/feature_points.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "encode/segmentation/diffusion.h"
+
+namespace segmorph {
+namespace {
+
+uint32_t farthest(const std::vector<double>& distance, const std::vector<uint32_t>& vertices) {
+  uint32_t best = vertices.front();
+  for (uint32_t v : vertices)
+    if (distance[v] > distance[best] && std::isfinite(distance[v])) best = v;
+  return best;
+}
+
+}  // namespace
+
+std::vector<uint32_t> maxima(const std::vector<double>& f, const std::vector<uint32_t>& vertices,
+                             const std::vector<double>& positions, const VertexAdjacency& adjacency, double radius) {
+  std::vector<uint32_t> found;
+  for (uint32_t v : vertices) {
+    bool ring_maximum = true;  // cheap first test: the 1-ring
+    for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1] && ring_maximum; ++i) {
+      const uint32_t u = adjacency.neighbour[i];
+      ring_maximum = f[u] < f[v] || (f[u] == f[v] && v < u);
+    }
+    if (!ring_maximum) continue;
+    const std::vector<double> near = edge_path_distances(positions, adjacency, v, radius);
+    bool maximum = true;
+    for (uint32_t u : vertices)
+      if (near[u] <= radius && u != v && (f[u] > f[v] || (f[u] == f[v] && u < v))) {
+        maximum = false;
+        break;
+      }
+    if (maximum) found.push_back(v);
+  }
+  return found;
+}
+
+std::array<uint32_t, 2> farthest_points(const std::vector<double>& positions, const VertexAdjacency& adjacency,
+                                        const std::vector<uint32_t>& vertices) {
+  const uint32_t v1 = farthest(edge_path_distances(positions, adjacency, vertices.front()), vertices);
+  const uint32_t v2 = farthest(edge_path_distances(positions, adjacency, v1), vertices);
+  return {v1, v2};
+}
+
+std::vector<uint32_t> feature_points(const std::vector<double>& f1, const std::vector<double>& f2,
+                                     const std::vector<uint32_t>& vertices, const std::vector<double>& positions,
+                                     const VertexAdjacency& adjacency, double radius,
+                                     const std::array<uint32_t, 2>& farthest) {
+  const std::vector<uint32_t> e1 = maxima(f1, vertices, positions, adjacency, radius);
+  const std::vector<uint32_t> e2 = maxima(f2, vertices, positions, adjacency, radius);
+  std::vector<uint32_t> features;
+  for (uint32_t p : e1) {
+    const std::vector<double> near = edge_path_distances(positions, adjacency, p, radius);
+    if (std::any_of(e2.begin(), e2.end(), [&](uint32_t q) { return near[q] <= radius; })) features.push_back(p);
+  }
+  if (features.empty()) features = {farthest[0], farthest[1]};
+  return features;
+}
+
+}  // namespace segmorph

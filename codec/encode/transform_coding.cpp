@@ -1,0 +1,432 @@
+#include "encode/transform_coding.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "common/frame_sequence.h"
+#include "common/reconstruction.h"
+#include "common/stream_format.h"
+#include "decode/frame_decoder.h"
+#include "decode/transform_residuals.h"
+#include "encode/metrics.h"
+#include "encode/parallel.h"
+#include "encode/rate_control.h"
+#include "encode/transform_symbols.h"
+
+namespace segmorph {
+namespace {
+
+using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+// The residual trajectories, W × 3 rows of F: floats, as the frames are (half the memory of doubles on large meshes).
+using Rows = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// Above this many frames the bases' eigenproblems (F × F) are not tried.
+constexpr size_t kMaxTransformFrames = 2048;
+// The coefficient steps tried: kSteps from kFinestStep to kCoarsestStep times the budget's step (the uniform
+// quantizer step whose noise alone would spend the whole budget on every value).
+constexpr int kSteps = 24;
+constexpr double kFinestStep = 0.1, kCoarsestStep = 24;
+// A basis vector's estimated price while choosing: its entries at this many bits each, and its step.
+constexpr double kEstimatedBitsPerEntry = 4;
+
+// Evenly spaced vertices of `rows` (their three axes' rows side by side, as members and the stream list them), at most
+// `most` rows in all (all of them when there are no more): the rows that inform a basis and its options. Whole
+// vertices, so that no stride can pick one axis only.
+std::vector<Eigen::Index> sample(const std::vector<Eigen::Index>& rows, size_t most) {
+  if (rows.size() <= most) return rows;
+  const uint64_t vertices = rows.size() / 3, picked = std::max<size_t>(most / 3, 1);
+  std::vector<Eigen::Index> out;
+  out.reserve(size_t(picked) * 3);
+  for (uint64_t j = 0; j < picked; ++j) {
+    const size_t first = size_t(j * vertices / picked) * 3;
+    out.insert(out.end(), rows.begin() + ptrdiff_t(first), rows.begin() + ptrdiff_t(first + 3));
+  }
+  return out;
+}
+
+// The rows `which` as doubles, with their weights times `scale` (how many rows each stands for).
+void gather(const Rows& rows, const std::vector<double>& weight, const std::vector<Eigen::Index>& which, double scale,
+            Matrix& out, std::vector<double>& out_weight) {
+  out.resize(Eigen::Index(which.size()), rows.cols());
+  out_weight.resize(which.size());
+  for (size_t i = 0; i < which.size(); ++i) {
+    out.row(Eigen::Index(i)) = rows.row(which[i]).cast<double>();
+    out_weight[i] = weight[size_t(which[i])] * scale;
+  }
+}
+
+// The squared error of the frames a decoder makes of a version-4 `content` against the problem's clips, none kept:
+// each frame's sum (in squared_error()'s order within the frame), then the frames' in order. Version-4 frames depend
+// on none before them, so ranges of them decode on threads of their own, each with a decoder of its own (8 bytes per
+// coefficient): on one thread when that would take more than 256 MiB a thread. False when the content does not
+// decode.
+bool decoded_error(const EncodeProblem& problem, const StreamContent& content, double& error) {
+  std::vector<const float*> originals;
+  for (const FrameSequence& clip : problem.clips)
+    for (size_t j = 0; j < clip.frame_count; ++j) originals.push_back(clip.frame(j));
+  std::vector<double> frame_error(originals.size(), 0.0);
+  std::vector<char> failed(originals.size(), 0);
+  const size_t threads = content.coefficient_symbols.size() * sizeof(double) > (size_t(256) << 20)
+                             ? 1
+                             : thread_count(problem.settings.threads);
+  parallel_ranges(originals.size(), threads, [&](size_t begin, size_t end) {
+    FrameLoop loop(content, problem.base, problem.clips[0].triangles);
+    if (!loop.status().ok()) {
+      failed[begin] = 1;
+      return;
+    }
+    std::vector<float> frame(size_t(content.vertex_count) * 3);
+    const FrameLoop::Residuals none;  // version 4 reads no residual symbols
+    for (size_t f = begin; f < end; ++f) {
+      if (!loop.decode(f, none, frame.data(), nullptr).ok()) {
+        failed[f] = 1;
+        return;
+      }
+      add_squared_error(originals[f], frame.data(), frame.size(), frame_error[f]);
+    }
+  });
+  if (std::find(failed.begin(), failed.end(), 1) != failed.end()) return false;
+  error = 0;
+  for (double e : frame_error) error += e;
+  return true;
+}
+
+// The basis sizes tried: 0, 1, 2, ... then about 25 % apart, up to the format's kMaxBasisSize.
+std::vector<size_t> basis_sizes(size_t most) {
+  std::vector<size_t> sizes = {0};
+  most = std::min<size_t>(most, format::kMaxBasisSize);
+  for (size_t m = 1; m <= most; m = std::max(m + 1, m * 5 / 4)) sizes.push_back(m);
+  return sizes;
+}
+
+// The orthonormal PCA basis of the rows (each weighted), as rows, by decreasing energy: the eigenvectors of
+// rowsᵀ W rows (F × F), or, with fewer rows than frames, of rows W rowsᵀ (n × n) taken back through the rows (the
+// same vectors, for a smaller eigenproblem). Only the vectors before the point where the energy left (the
+// eigenvalues after them) is below `negligible`, and none of no energy.
+Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible) {
+  Eigen::MatrixXd scaled = rows;
+  for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
+  const bool dual = scaled.rows() < scaled.cols();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(dual ? Eigen::MatrixXd(scaled * scaled.transpose())
+                                                             : Eigen::MatrixXd(scaled.transpose() * scaled));
+  const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
+  const double largest = std::max(values.maxCoeff(), 0.0);
+  double left = std::max(values.sum(), 0.0);
+  Matrix basis(0, scaled.cols());
+  for (Eigen::Index i = values.size() - 1; i >= 0 && left > negligible && values(i) > largest * 1e-12; --i) {
+    Eigen::RowVectorXd vector =
+        dual ? Eigen::RowVectorXd((scaled.transpose() * solver.eigenvectors().col(i)).transpose())
+             : Eigen::RowVectorXd(solver.eigenvectors().col(i).transpose());
+    vector /= vector.norm();
+    basis.conservativeResize(basis.rows() + 1, Eigen::NoChange);
+    basis.row(basis.rows() - 1) = vector;
+    left -= values(i);
+  }
+  return basis;
+}
+
+struct Option {
+  uint32_t source = format::kBasisNone;
+  size_t m = 0;
+  double step = 0, bits = 0, error = 0;
+};
+
+// Zeroth-order bits of the quantized values of column `column` (step `step`), and their squared quantization error
+// (each row weighted) into `quantization`.
+double column_bits(const Matrix& coefficients, Eigen::Index column, double step, const std::vector<double>& weight,
+                   double& quantization, std::vector<uint32_t>& counts) {
+  const size_t n = size_t(coefficients.rows());
+  const double inverse = 1 / step, reach = coefficients.col(column).cwiseAbs().maxCoeff() * inverse;
+  quantization = 0;
+  auto add = [&](uint32_t count) { return count ? -double(count) * std::log2(double(count) / double(n)) : 0.0; };
+  double bits = 0;
+  if (reach <= 4.0 * double(n) + 64) {  // a histogram over the values' range
+    const int64_t span = int64_t(reach + 0.5) + 1;
+    counts.assign(size_t(2 * span + 1), 0);
+    for (size_t r = 0; r < n; ++r) {
+      const double c = coefficients(Eigen::Index(r), column);
+      const int64_t index = quantizer_index(c * inverse);
+      const double q = double(index);
+      ++counts[size_t(index + span)];
+      quantization += weight[r] * (c - q * step) * (c - q * step);
+    }
+    for (uint32_t count : counts) bits += add(count);
+    return bits;
+  }
+  std::unordered_map<int64_t, uint32_t> map;
+  for (size_t r = 0; r < n; ++r) {
+    const double c = coefficients(Eigen::Index(r), column);
+    const int64_t index = quantizer_index(c * inverse);
+    const double q = double(index);
+    ++map[index];
+    quantization += weight[r] * (c - q * step) * (c - q * step);
+  }
+  for (const auto& entry : map) bits += add(entry.second);
+  return bits;
+}
+
+// The options of one cluster's rows in one basis (coefficients: the rows' projections, by decreasing energy): for
+// each basis size and step, the zeroth-order bits of the quantized coefficients (a histogram per vector) and the
+// squared error (dropped energy plus quantization), each row weighted. Vectors past the point where what is left of
+// the rows' energy is below `negligible` are not tried; `energy` receives the energy of each vector tried. The rows
+// may be a sample, each standing for `scale` rows (their weights scaled alike): the bits are scaled by it.
+void add_options(const Matrix& coefficients, const std::vector<double>& weight, double scale, double total,
+                 uint32_t source, double unit, double bits_per_vector, double negligible, std::vector<Option>& options,
+                 std::vector<double>& energy) {
+  const size_t n = size_t(coefficients.rows());
+  energy.clear();
+  double left = total;
+  for (Eigen::Index i = 0; i < coefficients.cols() && left > negligible; ++i) {
+    double e = 0;
+    for (size_t r = 0; r < n; ++r) e += weight[r] * coefficients(Eigen::Index(r), i) * coefficients(Eigen::Index(r), i);
+    energy.push_back(e);
+    left -= e;
+  }
+  const std::vector<size_t> sizes = basis_sizes(energy.size());
+  std::vector<uint32_t> counts;
+  for (int d = 0; d < kSteps; ++d) {
+    const double step = double(float(unit * kFinestStep * std::pow(kCoarsestStep / kFinestStep, d / (kSteps - 1.0))));
+    double bits = 0, kept = 0, quantization = 0;
+    size_t m = 0;
+    for (size_t size : sizes) {
+      if (size == 0) continue;
+      for (; m < size; ++m) {
+        double q = 0;
+        bits += column_bits(coefficients, Eigen::Index(m), step, weight, q, counts);
+        quantization += q;
+        kept += energy[m];
+      }
+      options.push_back({source, m, step,
+                         bits * scale + (source == format::kBasisOwn ? double(m) * bits_per_vector : 0) + 40,
+                         std::max(total - kept, 0.0) + quantization});
+    }
+  }
+}
+
+struct Choice {
+  std::vector<Option> per_cluster;
+  size_t stream_vectors = 0;
+  double bits = INFINITY, error = 0, lambda = 0;
+};
+
+// The options minimizing bits + lambda × error per cluster, lambda bisected so that the error is at most `budget`;
+// the stream's basis charged once, its size the largest any cluster uses (each of `sizes` tried as the most a
+// cluster may use).
+Choice choose(const std::vector<std::vector<Option>>& options, double budget, const std::vector<size_t>& sizes,
+              double bits_per_vector) {
+  Choice best;
+  for (size_t most : sizes) {
+    auto pick = [&](double lambda) {
+      Choice c;
+      c.bits = 0;
+      for (const std::vector<Option>& list : options) {
+        const Option* chosen = &list[0];
+        for (const Option& o : list)
+          if (!(o.source == format::kBasisStream && o.m > most) &&
+              o.bits + lambda * o.error < chosen->bits + lambda * chosen->error)
+            chosen = &o;
+        c.per_cluster.push_back(*chosen);
+        c.bits += chosen->bits, c.error += chosen->error;
+        if (chosen->source == format::kBasisStream) c.stream_vectors = std::max(c.stream_vectors, chosen->m);
+      }
+      c.bits += double(c.stream_vectors) * bits_per_vector;
+      c.lambda = lambda;
+      return c;
+    };
+    double low = 1e-12, high = 1e12;
+    if (pick(high).error > budget) continue;
+    for (int i = 0; i < 80 && high > low * (1 + 1e-6); ++i) {
+      const double middle = std::sqrt(low * high);
+      (pick(middle).error > budget ? low : high) = middle;
+    }
+    const Choice c = pick(high);
+    if (c.bits < best.bits) best = c;
+  }
+  return best;
+}
+
+// A basis as the stream carries it: the first m vectors, each with the step that minimizes bits + lambda × error
+// for a vector whose coefficients have squared norm `energy` (an entry's error reaches the frames through them):
+// F log2(1 / step) + lambda energy F step² / 12 is least at step² = 6 / (lambda ln 2 energy); at most half the
+// vector's largest entry, so that no vector quantizes to zero.
+StreamContent::Basis quantized_basis(const Matrix& basis, size_t m, const std::vector<double>& energy, double lambda) {
+  StreamContent::Basis out;
+  const size_t frames = size_t(basis.cols());
+  for (size_t i = 0; i < m; ++i) {
+    const Eigen::Index row = Eigen::Index(i);
+    const double largest = basis.row(row).cwiseAbs().maxCoeff();
+    double step = std::sqrt(6 / (lambda * std::log(2.0) * std::max(energy[i], 1e-300)));
+    step = std::clamp(step, largest * 1e-6, largest / 2);
+    const float stored = float(step);
+    out.step.push_back(stored);
+    for (size_t f = 0; f < frames; ++f)
+      out.entries.push_back(int32_t(std::lround(basis(row, Eigen::Index(f)) / double(stored))));
+  }
+  return out;
+}
+
+// The decoder's values of a basis's first m vectors (m × F).
+Matrix basis_values(const StreamContent::Basis& basis, size_t m, size_t frames) {
+  Matrix values(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(frames));
+  for (size_t i = 0; i < m; ++i)
+    for (size_t f = 0; f < frames; ++f)
+      values(Eigen::Index(i), Eigen::Index(f)) = double(basis.entries[i * frames + f]) * double(basis.step[i]);
+  return values;
+}
+
+}  // namespace
+
+bool transform_content(const EncodeProblem& problem, StreamContent content, double budget, std::vector<uint8_t>& stream,
+                       StreamSizes& sizes) {
+  const size_t welded = content.welded_count, frames = content.frame_count(), clusters = content.cluster_count;
+  if (frames > kMaxTransformFrames || !(budget > 0)) return false;
+  // What every candidate shares: the content without the residual loop (its symbols are as large as the frames).
+  content.flags &= uint8_t(~format::kResidualLoopFlags);
+  content.transform = true;
+  content.residuals = std::vector<int64_t>();
+  content.narrow_residuals = std::vector<int32_t>();
+  for (float& step : content.residual_step) step = 0;
+  // The trajectories: row w × 3 + a, the frames' positions minus the prediction of the quantized motion and weights.
+  Rows rows(Eigen::Index(welded * 3), Eigen::Index(frames));
+  {
+    const FramePredictions predictions(content, problem.base_welded);
+    std::vector<double> predicted(welded * 3);
+    for (size_t f = 0; f < frames; ++f) {
+      predictions.predict(f, predicted.data());
+      const float* positions = &problem.trajectories.positions[f * welded * 3];
+      for (size_t i = 0; i < welded * 3; ++i)
+        rows(Eigen::Index(i), Eigen::Index(f)) = float(double(positions[i]) - predicted[i]);
+    }
+  }
+  std::vector<double> weight(welded * 3);
+  for (size_t i = 0; i < weight.size(); ++i) weight[i] = double(problem.multiplicity[i / 3]);
+  const double unit = std::sqrt(12 * budget / (3.0 * double(content.vertex_count) * double(frames)));
+  const double bits_per_vector = double(frames) * kEstimatedBitsPerEntry + 32;
+  const double negligible = budget * 1e-4;  // energy a cluster may leave in vectors not tried
+  const size_t most_rows = problem.settings.transform_sample_rows;
+
+  // Each cluster's rows; the stream's basis and the cluster's own, each from at most most_rows rows; the options.
+  std::vector<std::vector<Eigen::Index>> members(clusters);
+  for (size_t w = 0; w < welded; ++w)
+    for (Eigen::Index a = 0; a < 3; ++a) members[content.labels[w]].push_back(Eigen::Index(w * 3) + a);
+  Matrix stream_basis;
+  {
+    std::vector<Eigen::Index> all(welded * 3);
+    for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
+    const std::vector<Eigen::Index> which = sample(all, most_rows);
+    Matrix sampled;
+    std::vector<double> sampled_weight;
+    gather(rows, weight, which, double(all.size()) / double(which.size()), sampled, sampled_weight);
+    stream_basis = pca_basis(sampled, sampled_weight, negligible);
+  }
+  std::vector<Matrix> own_basis(clusters);
+  std::vector<std::vector<double>> own_energy(clusters), stream_energy(clusters);
+  std::vector<std::vector<Option>> options(clusters);
+  auto prepare = [&](size_t k) {
+    if (members[k].empty()) {
+      options[k].push_back({format::kBasisNone, 0, 0, 8, 0.0});
+      return;
+    }
+    // The energy the options leave is the sample's less what they keep of it: both from the same rows, whose
+    // estimate of the cluster's is then unbiased (the sample's share of the whole is not).
+    const std::vector<Eigen::Index> which = sample(members[k], most_rows);
+    const double scale = double(members[k].size()) / double(which.size());
+    Matrix own;
+    std::vector<double> own_weight;
+    gather(rows, weight, which, scale, own, own_weight);
+    double total = 0;
+    for (size_t i = 0; i < which.size(); ++i) total += own_weight[i] * own.row(Eigen::Index(i)).squaredNorm();
+    options[k].push_back({format::kBasisNone, 0, 0, 8, total});
+    const Matrix in_stream = own * stream_basis.transpose();
+    add_options(in_stream, own_weight, scale, total, format::kBasisStream, unit, bits_per_vector, negligible,
+                options[k], stream_energy[k]);
+    own_basis[k] = pca_basis(own, own_weight, negligible);
+    const Matrix in_own = own * own_basis[k].transpose();
+    add_options(in_own, own_weight, scale, total, format::kBasisOwn, unit, bits_per_vector, negligible, options[k],
+                own_energy[k]);
+  };
+  parallel_ranges(clusters, thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) prepare(k);
+  });
+  // Choose, then measure the decoder's frames exactly; tighten the budget until they meet it.
+  const std::vector<size_t> basis_size_list = basis_sizes(frames);
+  double target = budget;
+  StreamContent transformed;
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    const Choice choice = choose(options, target, basis_size_list, bits_per_vector);
+    if (std::isinf(choice.bits)) return false;
+    transformed = content;
+    std::vector<double> energy(choice.stream_vectors, 0.0);
+    for (size_t k = 0; k < clusters; ++k)
+      if (choice.per_cluster[k].source == format::kBasisStream)
+        for (size_t i = 0; i < choice.per_cluster[k].m; ++i) energy[i] += stream_energy[k][i];
+    transformed.stream_basis = quantized_basis(stream_basis, choice.stream_vectors, energy, choice.lambda);
+    const Matrix stream_values = basis_values(transformed.stream_basis, choice.stream_vectors, frames);
+    transformed.basis_source.assign(clusters, format::kBasisNone);
+    transformed.basis_size.assign(clusters, 0);
+    transformed.coefficient_step.assign(clusters, 0.0f);
+    transformed.own_basis.assign(clusters, StreamContent::Basis());
+    for (size_t k = 0; k < clusters; ++k) {
+      const Option& o = choice.per_cluster[k];
+      transformed.basis_source[k] = o.source;
+      transformed.basis_size[k] = uint32_t(o.m);
+      transformed.coefficient_step[k] = float(o.step);
+      if (o.source == format::kBasisOwn)
+        transformed.own_basis[k] = quantized_basis(own_basis[k], o.m, own_energy[k], choice.lambda);
+    }
+    // The format's limits on the bases' entries and the coefficients (beyond them, the residual loop stays).
+    uint64_t vectors = choice.stream_vectors, count = 0;
+    for (size_t k = 0; k < clusters; ++k) {
+      if (transformed.basis_source[k] == format::kBasisOwn) vectors += transformed.basis_size[k];
+      count += uint64_t(transformed.basis_size[k]) * members[k].size();  // members: 3 rows per welded vertex
+    }
+    if (vectors * frames > format::kMaxBasisEntries || count > format::kMaxTransformCoefficients) return false;
+    // The coefficients: least squares against the basis as the decoder has it, then quantized.
+    TransformCoefficients coefficients = transform_layout(transformed);
+    for (size_t k = 0; k < clusters; ++k) {
+      const size_t m = transformed.basis_size[k];
+      if (m == 0) continue;
+      const Matrix values = transformed.basis_source[k] == format::kBasisOwn
+                                ? basis_values(transformed.own_basis[k], m, frames)
+                                : Matrix(stream_values.topRows(Eigen::Index(m)));
+      const Eigen::LDLT<Eigen::MatrixXd> gram(values * values.transpose());
+      const double step = double(transformed.coefficient_step[k]);
+      std::vector<char> fits(members[k].size(), 1);  // per row: every coefficient within the format's limit
+      parallel_ranges(members[k].size(), thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
+        for (size_t j = begin; j < end; ++j) {
+          const Eigen::Index r = members[k][j];
+          const Eigen::VectorXd c = gram.solve(Eigen::VectorXd(values * rows.row(r).transpose().cast<double>()));
+          const size_t w = size_t(r) / 3, a = size_t(r) % 3;
+          for (size_t i = 0; i < m; ++i) {
+            const double q = std::round(c(Eigen::Index(i)) / step);
+            if (!(std::abs(q) <= double(format::kMaxTransformValue))) fits[j] = 0;
+            coefficients.values[coefficients.offset[w] + a * m + i] = fits[j] ? int32_t(q) : 0;
+          }
+        }
+      });
+      if (std::find(fits.begin(), fits.end(), 0) != fits.end()) return false;
+    }
+    transformed.coefficient_symbols = transform_symbols(transformed, problem.traversal, coefficients);
+    // The frames as the decoder makes them, and their error.
+    double error = 0;
+    if (!decoded_error(problem, transformed, error)) return false;
+    if (error <= budget) {
+      stream.clear();
+      write_stream(transformed, problem.base, stream, &sizes);
+      // The format's bound on the frames a stream of its length may claim (a stream of almost no residuals on
+      // many vertices and frames can fall below it).
+      return uint64_t(welded) * frames <=
+             (uint64_t(stream.size() - format::kHeaderBytes) + 4) * format::kMaxVertexFramesPerByte;
+    }
+    // Tighter by the miss, and at least below the estimate of this choice scaled by it: a choice that does not
+    // change would miss again (an estimate from a sample can miss by more than the first factor moves it).
+    target *= std::pow(budget / error, 1.5);
+    if (choice.error > 0) target = std::min(target, choice.error * (budget / error));
+    target *= 0.999;
+  }
+  return false;
+}
+
+}  // namespace segmorph
