@@ -4,6 +4,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <new>
 
 #include "accessor.h"
 #include "common/topology.h"
@@ -61,18 +62,33 @@ tinygltf::Primitive bake_primitive(const tinygltf::Primitive& original, const Sa
       writer.add_floats(base, vertex_count, TINYGLTF_TYPE_VEC3, true, TINYGLTF_TARGET_ARRAY_BUFFER);
 
   const bool has_normals = !sampled.rest_normals.empty();
+  AnimationDecoder* decoder = sampled.normals.get();
   WeldedTopology topology;
   std::vector<float> base_normals, frame_normals(vertex_count * 3);
   std::vector<double> base_geometric;
+  // A frame's normals: a decoded primitive's turned by its decoder from the rest mesh (the Draco base) as every
+  // runtime turns them, a sampled one's from the base frame's.
+  auto turn = [&](const float* frame, float* out) {
+    if (!decoder) return deform_normals(base_geometric, base_normals.data(), frame, topology, out);
+    // The arguments are the decoder's own mesh's: it fails only when memory runs out.
+    if (!decoder->turn_normals(sampled.rest_normals.data(), frame, 1, out, vertex_count * 3).ok())
+      throw std::bad_alloc();
+  };
   if (has_normals || !sampled.rest_tangents.empty()) {
-    topology = weld_topology(sampled.clips);
-    const std::vector<double> rest_geometric = welded_vertex_normals(sampled.rest_positions.data(), topology);
+    if (!decoder || !sampled.rest_tangents.empty()) topology = weld_topology(sampled.clips);
+    const std::vector<double> rest_geometric =
+        decoder && sampled.rest_tangents.empty() ? std::vector<double>()
+                                                 : welded_vertex_normals(sampled.rest_positions.data(), topology);
     if (has_normals) {
       base_normals.resize(vertex_count * 3);
-      deform_normals(rest_geometric, sampled.rest_normals.data(), base, topology, base_normals.data());
+      if (decoder) {
+        turn(base, base_normals.data());
+      } else {
+        deform_normals(rest_geometric, sampled.rest_normals.data(), base, topology, base_normals.data());
+        base_geometric = welded_vertex_normals(base, topology);
+      }
       primitive.attributes["NORMAL"] =
           writer.add_floats(base_normals.data(), vertex_count, TINYGLTF_TYPE_VEC3, false, TINYGLTF_TARGET_ARRAY_BUFFER);
-      base_geometric = welded_vertex_normals(base, topology);
     }
     if (!sampled.rest_tangents.empty()) {
       // Tangents turn with the surface from rest to the base frame; their handedness (w) is kept.
@@ -102,7 +118,7 @@ tinygltf::Primitive bake_primitive(const tinygltf::Primitive& original, const Sa
       target["POSITION"] = all_zero(delta) ? writer.add_zeros(vertex_count, TINYGLTF_TYPE_VEC3, true)
                                            : writer.add_floats(delta.data(), vertex_count, TINYGLTF_TYPE_VEC3, true, 0);
       if (has_normals) {
-        deform_normals(base_geometric, base_normals.data(), frame, topology, frame_normals.data());
+        turn(frame, frame_normals.data());
         for (size_t i = 0; i < delta.size(); ++i) delta[i] = frame_normals[i] - base_normals[i];
         target["NORMAL"] = all_zero(delta) ? writer.add_zeros(vertex_count, TINYGLTF_TYPE_VEC3, false)
                                            : writer.add_floats(delta.data(), vertex_count, TINYGLTF_TYPE_VEC3, false, 0);

@@ -7,9 +7,7 @@
 #include "accessor.h"
 #include "bake.h"
 #include "common/stream_format.h"
-#include "common/topology.h"
 #include "compressed.h"
-#include "decode/normals.h"
 #include "encode/parallel.h"
 #include "primitive_encoding.h"
 #include "segmorph/decoder.h"
@@ -65,6 +63,7 @@ Status decode_primitive_stream(const tinygltf::Model& model, const tinygltf::Pri
     status = decoder.decode_clip(c, clip.positions.data(), clip.positions.size());
     if (!status.ok()) return failed(status);
   }
+  if (!out.rest_normals.empty()) out.normals = std::make_shared<AnimationDecoder>(std::move(decoder));
   return Status::Ok();
 }
 
@@ -77,7 +76,7 @@ DecodedFrames decoded_frames(int mesh, int primitive, bool targets, const std::v
 }
 
 // Decodes the stream of a primitive that keeps its morph targets and fills the targets in: POSITION with the
-// decoded displacements, NORMAL (where the target has it) derived as bake derives frame normals. `bytes`: the
+// decoded displacements, NORMAL (where the target has it) turned by the decoder (AnimationDecoder::turn_normals). `bytes`: the
 // stream's length.
 Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
                        const std::string& what, size_t& bytes, std::vector<FrameSequence>* frames) {
@@ -100,13 +99,7 @@ Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, c
     for (size_t t = 0; t < deltas.size(); ++t) std::copy(deltas[t].begin(), deltas[t].end(), (*frames)[0].frame(t));
   }
   const bool normals = !rest.rest_normals.empty();
-  WeldedTopology topology;
-  std::vector<double> base_geometric;
   std::vector<float> frame_normals(vertex_count * 3), normal_delta(vertex_count * 3);
-  if (normals) {
-    topology = weld_topology(clips);
-    base_geometric = welded_vertex_normals(rest.rest_positions.data(), topology);
-  }
   for (size_t t = 0; t < deltas.size(); ++t) {
     std::map<std::string, int>& target = primitive.targets[t];
     if (!target.count("POSITION"))
@@ -114,7 +107,9 @@ Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, c
     target["POSITION"] = writer.add_floats(deltas[t].data(), vertex_count, TINYGLTF_TYPE_VEC3, true, 0);
     if (!target.count("NORMAL")) continue;
     if (!normals) return Status(StatusCode::bad_data, what + ": a morph target has NORMAL, the primitive has none");
-    deform_normals(base_geometric, rest.rest_normals.data(), clips[0].frame(t), topology, frame_normals.data());
+    const Status turned = rest.normals->turn_normals(rest.rest_normals.data(), clips[0].frame(t), 1,
+                                                     frame_normals.data(), frame_normals.size());
+    if (!turned.ok()) return Status(turned.code(), what + ": " + turned.message());
     for (size_t i = 0; i < normal_delta.size(); ++i) normal_delta[i] = frame_normals[i] - rest.rest_normals[i];
     target["NORMAL"] = writer.add_floats(normal_delta.data(), vertex_count, TINYGLTF_TYPE_VEC3, false, 0);
   }

@@ -4,11 +4,13 @@
 #include <tiny_gltf.h>
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "animation.h"
 #include "common/frame_sequence.h"
+#include "segmorph/decoder.h"
 #include "segmorph/segmorph.h"  // SampleSettings
 #include "segmorph/status.h"
 
@@ -48,6 +50,9 @@ struct SampledPrimitive {
   std::vector<float> rest_tangents;   // V × 4, empty when the primitive has no TANGENT
   std::vector<std::vector<float>> target_deltas;  // per morph target: V × 3 POSITION displacements (empty: none)
   std::vector<FrameSequence> clips;   // one per AnimatedNode::clips entry, same order
+  // A decoded primitive's (decode): the decoder of its stream, which turns its normals as every runtime does
+  // (AnimationDecoder::turn_normals); null for a sampled one, whose normals bake turns itself.
+  std::shared_ptr<AnimationDecoder> normals;
 };
 
 // Reads `primitive`'s POSITION (VEC3), NORMAL (VEC3) and TANGENT (VEC4) into out's rest_* fields, checking that

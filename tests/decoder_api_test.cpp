@@ -180,6 +180,105 @@ void expect_one_line(const char* message) {
   EXPECT_EQ(std::strchr(message, '\n'), nullptr) << message;
 }
 
+// A rotation about z by `angle` of V × 3 floats.
+std::vector<float> rotated(const std::vector<float>& x, double angle) {
+  std::vector<float> out(x.size());
+  for (size_t i = 0; i < x.size(); i += 3) {
+    out[i] = float(std::cos(angle) * x[i] - std::sin(angle) * x[i + 1]);
+    out[i + 1] = float(std::sin(angle) * x[i] + std::cos(angle) * x[i + 1]);
+    out[i + 2] = x[i + 2];
+  }
+  return out;
+}
+
+TEST(DecoderApi, NormalsTurnWithTheSurface) {
+  for (const Case& c : cases()) {
+    segmorph_decoder* decoder = segmorph_decoder_create();
+    ASSERT_EQ(open(decoder, c), SEGMORPH_STATUS_OK) << c.name;
+    const size_t floats = c.base.size();
+    // The base surface's normals: unit, and outward on the (convex, stretched) sphere.
+    std::vector<float> surface(floats);
+    ASSERT_EQ(segmorph_decoder_surface_normals(decoder, nullptr, surface.data(), floats), SEGMORPH_STATUS_OK);
+    for (size_t v = 0; v < floats / 3; ++v) {
+      const float* n = &surface[v * 3];
+      ASSERT_NEAR(std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1.0, 1e-6) << c.name << " vertex " << v;
+      EXPECT_GT(n[0] * c.base[v * 3] + n[1] * c.base[v * 3 + 1] + n[2] * c.base[v * 3 + 2], 0) << c.name;
+    }
+    // Authored normals (here: the surface's, tilted) come back from the base mesh itself as they were, normalized.
+    std::vector<float> authored(floats);
+    for (size_t i = 0; i < floats; ++i) authored[i] = surface[i] + (i % 3 == 2 ? 0.3f : 0.0f);
+    const std::vector<float> turned_base = rotated(c.base, 0.0), turned_frame = rotated(c.base, 0.7);
+    std::vector<float> shapes = turned_base;
+    shapes.insert(shapes.end(), turned_frame.begin(), turned_frame.end());
+    std::vector<float> out(2 * floats);
+    ASSERT_EQ(segmorph_decoder_turn_normals(decoder, authored.data(), shapes.data(), 2, out.data(), out.size()),
+              SEGMORPH_STATUS_OK);
+    std::vector<float> unit(floats);
+    for (size_t v = 0; v < floats / 3; ++v) {
+      const float* a = &authored[v * 3];
+      const double length = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] + double(a[2]) * a[2]);
+      for (int k = 0; k < 3; ++k) unit[v * 3 + size_t(k)] = float(a[k] / length);
+    }
+    // Rotated, the surface normal a becomes R a, and a normal turned by the smallest rotation taking a to R a keeps its
+    // angle to it (it is R n only where n and a lie in a plane across the axis).
+    const std::vector<float> surface_now = rotated(surface, 0.7);
+    for (size_t i = 0; i < floats; ++i) ASSERT_NEAR(out[i], unit[i], 1e-6) << c.name << " float " << i;
+    for (size_t v = 0; v < floats / 3; ++v) {
+      const float *n = &unit[v * 3], *a = &surface[v * 3], *m = &out[floats + v * 3], *b = &surface_now[v * 3];
+      ASSERT_NEAR(m[0] * b[0] + m[1] * b[1] + m[2] * b[2], n[0] * a[0] + n[1] * a[1] + n[2] * a[2], 1e-5)
+          << c.name << " vertex " << v;
+    }
+    // The surface's own normals turn to the rotated surface's.
+    ASSERT_EQ(segmorph_decoder_turn_normals(decoder, surface.data(), turned_frame.data(), 1, out.data(), floats),
+              SEGMORPH_STATUS_OK);
+    for (size_t i = 0; i < floats; ++i) ASSERT_NEAR(out[i], surface_now[i], 1e-5) << c.name << " float " << i;
+    // Decoded frames: the C++ API gives the C API's floats.
+    std::vector<float> frames(segmorph_decode_clip_bound(decoder, 0)), normals(frames.size());
+    ASSERT_EQ(segmorph_decode_clip(decoder, 0, frames.data(), frames.size()), SEGMORPH_STATUS_OK);
+    const size_t count = segmorph_decoder_frame_count(decoder, 0);
+    ASSERT_EQ(segmorph_decoder_turn_normals(decoder, surface.data(), frames.data(), count, normals.data(),
+                                            normals.size()),
+              SEGMORPH_STATUS_OK);
+    AnimationDecoder api;
+    ASSERT_TRUE(api.open(c.stream.data(), c.stream.size(), c.base.data(), floats / 3, c.clips[0].triangles.data(),
+                         c.clips[0].triangles.size())
+                    .ok());
+    std::vector<float> again(normals.size());
+    ASSERT_TRUE(api.turn_normals(surface.data(), frames.data(), count, again.data(), again.size()).ok());
+    EXPECT_TRUE(same_bits(again.data(), normals.data(), normals.size())) << c.name;
+    segmorph_decoder_destroy(decoder);
+  }
+}
+
+TEST(DecoderApi, NormalsRefuseBadArguments) {
+  const Case c = cases()[0];
+  const size_t floats = c.base.size();
+  std::vector<float> normals(floats, 0.5f), out(2 * floats);
+  segmorph_decoder* decoder = segmorph_decoder_create();
+  EXPECT_EQ(segmorph_decoder_turn_normals(decoder, normals.data(), c.base.data(), 1, out.data(), out.size()),
+            SEGMORPH_STATUS_INVALID_ARGUMENT);  // nothing open
+  EXPECT_EQ(segmorph_decoder_surface_normals(decoder, nullptr, out.data(), out.size()),
+            SEGMORPH_STATUS_INVALID_ARGUMENT);
+  ASSERT_EQ(open(decoder, c), SEGMORPH_STATUS_OK);
+  EXPECT_EQ(segmorph_decoder_turn_normals(decoder, nullptr, c.base.data(), 1, out.data(), out.size()),
+            SEGMORPH_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(segmorph_decoder_turn_normals(decoder, normals.data(), nullptr, 1, out.data(), out.size()),
+            SEGMORPH_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(segmorph_decoder_turn_normals(decoder, normals.data(), c.base.data(), 1, nullptr, out.size()),
+            SEGMORPH_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(segmorph_decoder_turn_normals(decoder, normals.data(), c.base.data(), 2, out.data(), floats),
+            SEGMORPH_STATUS_INVALID_ARGUMENT);  // room for one frame, two asked
+  EXPECT_EQ(segmorph_decoder_turn_normals(decoder, normals.data(), c.base.data(), SIZE_MAX / 2, out.data(), out.size()),
+            SEGMORPH_STATUS_INVALID_ARGUMENT);  // a count whose size overflows
+  expect_one_line(segmorph_decoder_message(decoder));
+  EXPECT_EQ(segmorph_decoder_surface_normals(decoder, nullptr, out.data(), floats - 1),
+            SEGMORPH_STATUS_INVALID_ARGUMENT);
+  EXPECT_EQ(segmorph_decoder_turn_normals(decoder, normals.data(), c.base.data(), 0, nullptr, 0), SEGMORPH_STATUS_OK);
+  EXPECT_EQ(segmorph_decoder_turn_normals(decoder, normals.data(), c.base.data(), 1, out.data(), floats),
+            SEGMORPH_STATUS_OK);
+  segmorph_decoder_destroy(decoder);
+}
+
 TEST(DecoderApi, BadArgumentsAreRefusedWithAMessage) {
   const Case c = cases()[1];
   const std::vector<uint32_t>& triangles = c.clips[0].triangles;

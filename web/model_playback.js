@@ -1,7 +1,6 @@
 // What the GPU playback of a version-4 model (docs/runtime.md, "Playing the model") does the same way in the three.js
 // and Babylon.js plugins: the parameters blended by the frames' influences, the layout of its textures and the surface
 // around each vertex for its normals.
-import { SurfaceNormals } from './surface_normals.js';
 
 // GLSL (ES 3.0) of texel i of a texture read in rows, as every texture of the GPU playback is.
 export const TEXEL_GLSL = /* glsl */`
@@ -45,7 +44,8 @@ vec3 segmorphEvaluate( vec3 x, ivec4 clusters, vec4 weights, int offset ) {
 }
 `;
 
-// GLSL (ES 3.0, after TEXEL_GLSL) of normals that turn with the surface, as segmorph decode turns them (SurfaceNormals):
+// GLSL (ES 3.0, after TEXEL_GLSL) of normals that turn with the surface, as segmorph decode turns them (the decoder's
+// turn_normals):
 // segmorphTurn(n, surface, first, count) is n turned by the smallest rotation taking `surface` (the base surface
 // normal around the vertex's point) to today's, the normalized sum of the cross products of the `count` triangles
 // from entry `first` of segmorphTriangles (each a texel of three vertex indices) at today's positions, texels of
@@ -96,17 +96,12 @@ export function textureWidth(count) {
   return width;
 }
 
-// The surface around each vertex's point, for the shaders that turn normals as SurfaceNormals does: per vertex its
-// point's base surface normal and (first, count) of its triangles, and the triangles of every point in a list, each
-// entry `stride` floats (its three vertex indices, then zeros).
-export function surfaceRings(positions, indices, stride) {
-  const count = positions.length / 3, keys = new Map(), point = new Uint32Array(count);
-  for (let v = 0; v < count; ++v) {
-    const key = `${positions[v * 3]},${positions[v * 3 + 1]},${positions[v * 3 + 2]}`;
-    if (!keys.has(key)) keys.set(key, keys.size);
-    point[v] = keys.get(key);
-  }
-  const points = keys.size, first = new Uint32Array(points + 1);
+// The surface around each vertex's point, for the shaders that turn normals as the decoder's turn_normals does: per
+// vertex its point's base surface normal (model.surface) and (first, count) of its triangles, and the triangles of
+// every point in a list, each entry `stride` floats (its three vertex indices, then zeros). A point is a welded vertex
+// of the stream (model.welded: vertices whose positions are equal in every frame).
+export function surfaceRings(model, indices, stride) {
+  const point = model.welded, points = model.weldedCount, first = new Uint32Array(points + 1);
   for (let i = 0; i + 2 < indices.length; i += 3) for (let j = 0; j < 3; ++j) first[point[indices[i + j]] + 1] += 1;
   for (let p = 0; p < points; ++p) first[p + 1] += first[p];
   const at = first.slice(0, points), list = new Float32Array(first[points] * stride);
@@ -115,13 +110,10 @@ export function surfaceRings(positions, indices, stride) {
       const e = at[point[indices[i + j]]]++;
       list[e * stride] = indices[i], list[e * stride + 1] = indices[i + 1], list[e * stride + 2] = indices[i + 2];
     }
-  const base = new SurfaceNormals(positions, indices, new Float32Array(0)).base;
-  const surface = new Float32Array(count * 3), ring = new Uint32Array(count * 2);
-  for (let v = 0; v < count; ++v) {
-    const p = point[v];
-    surface.set(base.subarray(p * 3, p * 3 + 3), v * 3);
-    ring[v * 2] = first[p];
-    ring[v * 2 + 1] = first[p + 1] - first[p];
+  const ring = new Uint32Array(point.length * 2);
+  for (let v = 0; v < point.length; ++v) {
+    ring[v * 2] = first[point[v]];
+    ring[v * 2 + 1] = first[point[v] + 1] - first[point[v]];
   }
-  return { surface, ring, list, entries: first[points] };
+  return { surface: model.surface, ring, list, entries: first[points] };
 }

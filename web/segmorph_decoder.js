@@ -140,33 +140,62 @@ function open(decoder, check, pointers, stream, positions, indices) {
                                    corners.length), 'open');
 }
 
-// The whole stream: { version, lossless, vertexCount, clips: [{ frameCount, frames }] }, frames a Float32Array of
-// frameCount × vertexCount × 3 positions.
-function decodeStream(stream, positions, indices) {
+function asNormals(normals, floats) {
+  if (!(normals instanceof Float32Array) || normals.length !== floats)
+    throw new TypeError(`segmorph: normals must be a Float32Array of the base mesh's ${floats} floats (V × 3)`);
+  return normals;
+}
+
+// The base normals (at `normalPointer`, V × 3) turned to the `count` frames at `framePointer`, as segmorph decode turns
+// them (the C API's segmorph_decoder_turn_normals): a Float32Array of count × V × 3.
+function turnedNormals(decoder, check, pointers, normalPointer, framePointer, count, floats) {
+  const out = allocate(floats * 4);
+  pointers.push(out);
+  check(wasm.segmorph_decoder_turn_normals(decoder, normalPointer, framePointer, count, out, floats), 'normals');
+  return floatsOut(out, floats);
+}
+
+// The whole stream: { version, lossless, vertexCount, clips: [{ frameCount, frames, normals }] }, frames a
+// Float32Array of frameCount × vertexCount × 3 positions. With `normals` (the base mesh's NORMAL, V × 3), each clip's
+// `normals` holds its frames' normals (frameCount × V × 3), turned with the surface as segmorph decode turns them.
+function decodeStream(stream, positions, indices, normals) {
   return withDecoder((decoder, check, pointers) => {
     open(decoder, check, pointers, stream, positions, indices);
+    const normalPointer = normals ? copyIn(asNormals(normals, positions.length)) : 0;
+    if (normals) pointers.push(normalPointer);
     const vertexCount = wasm.segmorph_decoder_vertex_count(decoder), clips = [];
     for (let clip = 0, count = wasm.segmorph_decoder_clip_count(decoder); clip < count; ++clip) {
       const floats = wasm.segmorph_decode_clip_bound(decoder, clip), out = allocate(floats * 4);
       pointers.push(out);
       check(wasm.segmorph_decode_clip(decoder, clip, out, floats), `clip ${clip}`);
-      clips.push({ frameCount: wasm.segmorph_decoder_frame_count(decoder, clip), frames: floatsOut(out, floats) });
+      const frameCount = wasm.segmorph_decoder_frame_count(decoder, clip);
+      clips.push({ frameCount, frames: floatsOut(out, floats),
+                   normals: normals ? turnedNormals(decoder, check, pointers, normalPointer, out, frameCount, floats) : null });
     }
     return { version: wasm.segmorph_decoder_stream_version(decoder), lossless: wasm.segmorph_decoder_lossless(decoder) === 1,
              vertexCount, clips };
   });
 }
 
-// Kept morph targets: { vertexCount, targetCount, deltas }, deltas a Float32Array of targetCount × vertexCount × 3
-// POSITION displacements (frame − base in binary32).
-function decodeTargets(stream, positions, indices) {
+// Kept morph targets: { vertexCount, targetCount, deltas, normals }, deltas a Float32Array of targetCount × vertexCount
+// × 3 POSITION displacements (frame − base in binary32). With `normals` (the base mesh's NORMAL), `normals` holds each
+// target's normals (targetCount × V × 3, absolute), turned as segmorph decode turns them.
+function decodeTargets(stream, positions, indices, normals) {
   return withDecoder((decoder, check, pointers) => {
     open(decoder, check, pointers, stream, positions, indices);
     const floats = wasm.segmorph_decode_clip_bound(decoder, 0), out = allocate(floats * 4);
     pointers.push(out);
+    const targetCount = wasm.segmorph_decoder_frame_count(decoder, 0);
+    let turned = null;
+    if (normals) {  // turned on the decoded shapes, as segmorph decode turns them
+      const normalPointer = copyIn(asNormals(normals, positions.length));
+      pointers.push(normalPointer);
+      check(wasm.segmorph_decode_clip(decoder, 0, out, floats), 'targets');
+      turned = turnedNormals(decoder, check, pointers, normalPointer, out, targetCount, floats);
+    }
     check(wasm.segmorph_decode_targets(decoder, out, floats), 'targets');
-    return { vertexCount: wasm.segmorph_decoder_vertex_count(decoder),
-             targetCount: wasm.segmorph_decoder_frame_count(decoder, 0), deltas: floatsOut(out, floats) };
+    return { vertexCount: wasm.segmorph_decoder_vertex_count(decoder), targetCount, deltas: floatsOut(out, floats),
+             normals: turned };
   });
 }
 
@@ -203,7 +232,8 @@ function decodeTracks(stream, timeCounts, samplers) {
 //   { version, vertexCount, weldedCount, clusterCount, frameCount, basisCount, coefficientCount, maxBasisSize,
 //     maxPairs, clipFrames: [frame count per clip], welded (V), clusters (W × 4), weights (W × 4), centroids (K × 3),
 //     bases (K × 2: first value, m), coefficientOffsets (W + 1), coefficients (vectors × 3), motion (F × K × 12),
-//     basis (F × N), bounds (6: min x y z, max x y z) }
+//     basis (F × N), bounds (6: min x y z, max x y z), surface (V × 3: each vertex's unit base surface normal at its
+//     point, for a shader that turns normals: the C API's segmorph_decoder_surface_normals) }
 const MODEL_INFO_FIELDS = ['vertexCount', 'weldedCount', 'clusterCount', 'frameCount', 'basisCount', 'coefficientCount',
                            'maxBasisSize', 'maxPairs'];
 
@@ -231,6 +261,8 @@ function readModel(decoder, check, pointers) {
   check(wasm.segmorph_decoder_model_clusters(decoder, centroids.pointer, bases.pointer, K), 'model');
   const offsets = out(W + 1, Uint32Array), coefficients = out(C * 3, Float32Array);
   check(wasm.segmorph_decoder_model_coefficients(decoder, offsets.pointer, W + 1, coefficients.pointer, C * 3), 'model');
+  const surface = out(V * 3, Float32Array);
+  check(wasm.segmorph_decoder_surface_normals(decoder, 0, surface.pointer, V * 3), 'model');
   const motion = out(F * K * 12, Float32Array), basis = out(F * N, Float32Array), bounds = out(6, Float32Array);
   check(wasm.segmorph_decoder_model_motion(decoder, 0, F, motion.pointer, F * K * 12), 'model');
   check(wasm.segmorph_decoder_model_basis(decoder, 0, F, basis.pointer, F * N), 'model');
@@ -238,7 +270,7 @@ function readModel(decoder, check, pointers) {
   Object.assign(model, {
     welded: welded.take(), clusters: clusters.take(), weights: weights.take(), centroids: centroids.take(),
     bases: bases.take(), coefficientOffsets: offsets.take(), coefficients: coefficients.take(), motion: motion.take(),
-    basis: basis.take(), bounds: bounds.take(),
+    basis: basis.take(), bounds: bounds.take(), surface: surface.take(),
   });
   return model;
 }
@@ -305,16 +337,17 @@ class ModelDecoder {
 }
 
 // Frame by frame: a decoder that holds the stream and one frame (vertex count × 3 floats) in the module's memory and
-// decodes the next frame on demand, for a player that must not hold every frame. dispose() frees it.
+// decodes the next frame on demand, for a player that must not hold every frame; given the base mesh's normals, it
+// turns a shape's normals too (turnNormals). dispose() frees it.
 class StreamDecoder {
-  constructor(stream, positions, indices) {
+  constructor(stream, positions, indices, normals) {
     requireReady();
     this._decoder = wasm.segmorph_decoder_create();
     if (this._decoder === 0) throw new Error('segmorph: out of memory');
     this._pointers = [];
     try {
       open(this._decoder, (status, what) => this._check(status, what), this._pointers, stream, positions, indices);
-      // The decoder copied its inputs: free them now, keep one frame.
+      // The decoder copied its inputs: free them now, keep one frame (and the base normals and a frame's normals).
       for (const pointer of this._pointers) wasm.segmorph_wasm_free(pointer);
       this._pointers = [];
       this.vertexCount = wasm.segmorph_decoder_vertex_count(this._decoder);
@@ -322,6 +355,11 @@ class StreamDecoder {
       this.version = wasm.segmorph_decoder_stream_version(this._decoder);
       this._frame = allocate(this.vertexCount * 12);
       this._pointers = [this._frame];
+      if (normals) {
+        this._normals = copyIn(asNormals(normals, this.vertexCount * 3));
+        this._turned = allocate(this.vertexCount * 12);
+        this._pointers.push(this._normals, this._turned);
+      }
     } catch (error) {
       this.dispose();
       throw error;
@@ -347,6 +385,19 @@ class StreamDecoder {
     if (out.length < floats) throw new RangeError(`segmorph: the frame needs ${floats} floats`);
     this._check(wasm.segmorph_decode_frame(this._decoder, this._frame, floats), 'frame');
     out.set(new Float32Array(wasm.memory.buffer, this._frame, floats));
+    return out;
+  }
+
+  // With the base normals given at creation: the normals of the shape `positions` (V × 3; a decoded frame, or a blend
+  // of two) into `target` (a new Float32Array when absent), which it returns: turned as segmorph decode turns them.
+  turnNormals(positions, target) {
+    const floats = this.vertexCount * 3;
+    if (!this._normals) throw new Error('segmorph: the decoder was created without normals');
+    const out = target ?? new Float32Array(floats);
+    if (positions.length < floats || out.length < floats) throw new RangeError(`segmorph: the shape needs ${floats} floats`);
+    new Float32Array(wasm.memory.buffer, this._frame, floats).set(positions.subarray(0, floats));
+    this._check(wasm.segmorph_decoder_turn_normals(this._decoder, this._normals, this._frame, 1, this._turned, floats), 'normals');
+    out.set(new Float32Array(wasm.memory.buffer, this._turned, floats));
     return out;
   }
 
@@ -404,7 +455,7 @@ const api = {
   decodeTracks,
   decodeModel,
   createModelDecoder: (stream, positions, indices) => new ModelDecoder(stream, positions, indices),
-  createStreamDecoder: (stream, positions, indices) => new StreamDecoder(stream, positions, indices),
+  createStreamDecoder: (stream, positions, indices, normals) => new StreamDecoder(stream, positions, indices, normals),
   useWorkers,
   decodeStreamAsync: (...args) => inWorker('decodeStream', args),
   decodeTargetsAsync: (...args) => inWorker('decodeTargets', args),

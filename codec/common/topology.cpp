@@ -42,6 +42,43 @@ uint32_t find_root(std::vector<uint32_t>& parent, uint32_t x) {
 
 }  // namespace
 
+WeldedTopology welded_topology(std::vector<uint32_t> welded_index, size_t welded_count,
+                               const std::vector<uint32_t>& triangles) {
+  WeldedTopology topology;
+  topology.welded_index = std::move(welded_index);
+  topology.representative.assign(welded_count, UINT32_MAX);
+  for (uint32_t v = 0; v < topology.welded_index.size(); ++v) {
+    uint32_t& representative = topology.representative[topology.welded_index[v]];
+    if (representative == UINT32_MAX) representative = v;
+  }
+
+  topology.triangles.reserve(triangles.size());
+  for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
+    uint32_t a = topology.welded_index[triangles[t]];
+    uint32_t b = topology.welded_index[triangles[t + 1]];
+    uint32_t c = topology.welded_index[triangles[t + 2]];
+    if (a == b || b == c || a == c) continue;
+    topology.triangles.insert(topology.triangles.end(), {a, b, c});
+  }
+
+  std::vector<uint32_t> parent(welded_count);
+  std::iota(parent.begin(), parent.end(), 0u);
+  for (size_t t = 0; t < topology.triangles.size(); t += 3)
+    for (int k = 1; k < 3; ++k) {
+      uint32_t a = find_root(parent, topology.triangles[t]);
+      uint32_t b = find_root(parent, topology.triangles[t + k]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  topology.component.assign(welded_count, 0);
+  std::vector<uint32_t> component_of_root(welded_count, UINT32_MAX);
+  for (uint32_t w = 0; w < welded_count; ++w) {
+    uint32_t& component = component_of_root[find_root(parent, w)];
+    if (component == UINT32_MAX) component = uint32_t(topology.component_count++);
+    topology.component[w] = component;
+  }
+  return topology;
+}
+
 WeldedTopology weld_topology(const std::vector<FrameSequence>& clips, const std::vector<float>* also_equal) {
   assert(!clips.empty());
   const size_t vertex_count = clips[0].vertex_count;
@@ -98,45 +135,15 @@ WeldedTopology weld_topology(const std::vector<FrameSequence>& clips, const std:
     begin = end;
   }
 
-  WeldedTopology topology;
-  topology.welded_index.assign(vertex_count, 0);
+  std::vector<uint32_t> welded_index(vertex_count, 0);
   std::vector<uint32_t> welded_of_leader(vertex_count, UINT32_MAX);
+  uint32_t welded_count = 0;
   for (uint32_t v = 0; v < vertex_count; ++v) {
     uint32_t& welded = welded_of_leader[leader[v]];
-    if (welded == UINT32_MAX) {
-      welded = uint32_t(topology.representative.size());
-      topology.representative.push_back(v);
-    }
-    topology.welded_index[v] = welded;
+    if (welded == UINT32_MAX) welded = welded_count++;
+    welded_index[v] = welded;
   }
-
-  const std::vector<uint32_t>& triangles = clips[0].triangles;
-  topology.triangles.reserve(triangles.size());
-  for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
-    uint32_t a = topology.welded_index[triangles[t]];
-    uint32_t b = topology.welded_index[triangles[t + 1]];
-    uint32_t c = topology.welded_index[triangles[t + 2]];
-    if (a == b || b == c || a == c) continue;
-    topology.triangles.insert(topology.triangles.end(), {a, b, c});
-  }
-
-  const size_t welded_count = topology.welded_count();
-  std::vector<uint32_t> parent(welded_count);
-  std::iota(parent.begin(), parent.end(), 0u);
-  for (size_t t = 0; t < topology.triangles.size(); t += 3)
-    for (int k = 1; k < 3; ++k) {
-      uint32_t a = find_root(parent, topology.triangles[t]);
-      uint32_t b = find_root(parent, topology.triangles[t + k]);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
-  topology.component.assign(welded_count, 0);
-  std::vector<uint32_t> component_of_root(welded_count, UINT32_MAX);
-  for (uint32_t w = 0; w < welded_count; ++w) {
-    uint32_t& component = component_of_root[find_root(parent, w)];
-    if (component == UINT32_MAX) component = uint32_t(topology.component_count++);
-    topology.component[w] = component;
-  }
-  return topology;
+  return welded_topology(std::move(welded_index), welded_count, clips[0].triangles);
 }
 
 VertexAdjacency vertex_adjacency(const WeldedTopology& topology) {

@@ -37,6 +37,11 @@ struct VertexAdjacency {
 };
 VertexAdjacency vertex_adjacency(const WeldedTopology& topology);
 
+// The topology of a given welding: welded_index (V) numbers the welded vertices 0 .. welded_count − 1 in order of
+// their first vertex (as weld_topology and a stream's welding do); triangles: T × 3 indices into V.
+WeldedTopology welded_topology(std::vector<uint32_t> welded_index, size_t welded_count,
+                               const std::vector<uint32_t>& triangles);
+
 // Welds the vertices of one primitive over all of its clips. Every clip must have the same vertex
 // count and triangles (they are samples of the same primitive); there must be at least one clip.
 // Vertices no triangle uses are components of their own. With `also_equal` (V × 3 positions), vertices weld only

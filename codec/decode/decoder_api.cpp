@@ -3,15 +3,18 @@
 #include "segmorph/decoder.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <new>
 #include <string>
 #include <vector>
 
 #include "common/stream_format.h"
+#include "common/topology.h"
 #include "common/track_format.h"
 #include "common/track_set.h"
 #include "decode/frame_decoder.h"
+#include "decode/normals.h"
 #include "decode/playback_model.h"
 #include "decode/track_decoder.h"
 
@@ -86,6 +89,9 @@ struct AnimationDecoder::State {
   size_t pending_clip = 0, pending_frame = 0;
   // The version-4 model in float32, made when first asked for.
   std::unique_ptr<PlaybackModel> model;
+  // The surface normals turn on, made when first asked for: the stream's welding and the base surface's normals.
+  std::unique_ptr<WeldedTopology> surface;
+  std::vector<double> base_surface_normals;
 };
 
 AnimationDecoder::AnimationDecoder() = default;
@@ -231,6 +237,63 @@ Status short_destination(const char* what, size_t given, size_t needed) {
 }
 
 }  // namespace
+
+// The stream's welding as a topology, and the base mesh's surface normals on it (made on first use).
+Status AnimationDecoder::prepare_surface() {
+  if (!state_) return invalid("no stream is open");
+  State& state = *state_;
+  if (state.surface) return Status::Ok();
+  return guarded([&] {
+    const StreamContent& content = state.decoder.content();
+    auto surface = std::make_unique<WeldedTopology>(
+        welded_topology(content.welded_index, content.welded_count, state.triangles));
+    state.base_surface_normals = welded_vertex_normals(state.base.data(), *surface);
+    state.surface = std::move(surface);
+    return Status::Ok();
+  });
+}
+
+Status AnimationDecoder::turn_normals(const float* normals, const float* frames, size_t frame_count,
+                                      float* destination, size_t destination_floats) {
+  SEGMORPH_RETURN_IF_ERROR(prepare_surface());
+  const size_t frame_floats = vertex_count() * 3;
+  if (!normals && frame_floats > 0) return invalid("the normals are null");
+  if (!frames && frame_count > 0 && frame_floats > 0) return invalid("the frames are null");
+  if (frame_floats > 0 && frame_count > SIZE_MAX / frame_floats) return invalid("the frame count is too large");
+  if (!destination && frame_count * frame_floats > 0) return invalid("the destination is null");
+  if (destination_floats < frame_count * frame_floats)
+    return invalid("the destination holds " + std::to_string(destination_floats) + " floats, the frames need " +
+                   std::to_string(frame_count * frame_floats));
+  const State& state = *state_;
+  return guarded([&] {
+    for (size_t f = 0; f < frame_count; ++f)
+      deform_normals(state.base_surface_normals, normals, frames + f * frame_floats, *state.surface,
+                     destination + f * frame_floats);
+    return Status::Ok();
+  });
+}
+
+Status AnimationDecoder::surface_normals(const float* positions, float* destination, size_t destination_floats) {
+  SEGMORPH_RETURN_IF_ERROR(prepare_surface());
+  const size_t floats = vertex_count() * 3;
+  if (!destination && floats > 0) return invalid("the destination is null");
+  if (destination_floats < floats)
+    return invalid("the destination holds " + std::to_string(destination_floats) + " floats, the mesh needs " +
+                   std::to_string(floats));
+  const State& state = *state_;
+  return guarded([&] {
+    const std::vector<double> welded =
+        positions ? welded_vertex_normals(positions, *state.surface) : state.base_surface_normals;
+    const std::vector<uint32_t>& point = state.surface->welded_index;
+    for (size_t v = 0; v < point.size(); ++v) {
+      const double* n = &welded[size_t(point[v]) * 3];
+      const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      const double scale = length > 0 && std::isfinite(length) ? 1 / length : 0;
+      for (int c = 0; c < 3; ++c) destination[v * 3 + size_t(c)] = float(n[c] * scale);
+    }
+    return Status::Ok();
+  });
+}
 
 Status AnimationDecoder::make_model() {
   if (!state_) return invalid("no stream is open");

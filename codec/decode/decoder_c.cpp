@@ -166,6 +166,18 @@ segmorph_status segmorph_decoder_model_info(segmorph_decoder* decoder, segmorph_
   return status;
 }
 
+segmorph_status segmorph_decoder_turn_normals(segmorph_decoder* decoder, const float* normals, const float* frames,
+                                              size_t frame_count, float* destination, size_t destination_floats) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.turn_normals(normals, frames, frame_count, destination, destination_floats));
+}
+
+segmorph_status segmorph_decoder_surface_normals(segmorph_decoder* decoder, const float* positions, float* destination,
+                                                 size_t destination_floats) {
+  if (!decoder) return null_decoder();
+  return report(decoder, decoder->decoder.surface_normals(positions, destination, destination_floats));
+}
+
 segmorph_status segmorph_decoder_model_welded(segmorph_decoder* decoder, uint32_t* destination, size_t count) {
   if (!decoder) return null_decoder();
   return report(decoder, decoder->decoder.model_welded(destination, count));

@@ -92,6 +92,20 @@ class SEGMORPH_API AnimationDecoder {
   // Positions the decoder at the first frame of `clip` (invalid_argument when there is no such clip).
   Status seek(size_t clip);
 
+  // Normals that turn with the surface (spec/README.md, "Normals and tangents"): what segmorph decode writes, and
+  // what the web plugins show. Each vertex's base normal (normals: V × 3, the base mesh's NORMAL) is turned by the
+  // smallest rotation taking the area-weighted geometric normal of the surface around its point in the base mesh to
+  // the one in the frame, then normalized; where either surface normal vanishes it is only normalized. Vertices the
+  // stream welds (equal positions in every frame of the encoded animation) are one point. frames: frame_count × V ×
+  // 3 positions (decoded frames, or the base plus targets' displacements, or any shape of the mesh); destination: room
+  // for frame_count × V × 3 floats (destination_floats).
+  Status turn_normals(const float* normals, const float* frames, size_t frame_count, float* destination,
+                      size_t destination_floats);
+  // V × 3: each vertex's unit geometric surface normal at its point (area-weighted over the triangles around it;
+  // zero where none is), in `positions` (V × 3; the base mesh when null): what a shader that turns normals itself
+  // needs of the base mesh.
+  Status surface_normals(const float* positions, float* destination, size_t destination_floats);
+
   // The model of a version-4 stream (spec/bitstream.md 8.5 and 8.7.1), for a player that evaluates frames itself,
   // on a GPU or a CPU, instead of decoding them (docs/runtime.md, "Playing the model"). Frame f of the stream, at
   // vertex v of welded vertex w, is
@@ -142,6 +156,7 @@ class SEGMORPH_API AnimationDecoder {
 
  private:
   Status make_model();  // the model of the open stream, made on first use (unsupported before version 4)
+  Status prepare_surface();  // the welding and base surface turn_normals and surface_normals use, on first use
 
   struct State;
   std::unique_ptr<State> state_;

@@ -113,6 +113,18 @@ SEGMORPH_API segmorph_status segmorph_decode_frame(segmorph_decoder* decoder, fl
  * keeps a checkpoint of about 3 bytes per vertex at each), else the cost of decoding the frames before it. */
 SEGMORPH_API segmorph_status segmorph_decoder_seek(segmorph_decoder* decoder, size_t clip);
 
+/* Normals that turn with the surface, as segmorph decode writes them (AnimationDecoder::turn_normals in decoder.h):
+ * the base mesh's normals (vertex count x 3 floats) turned to each of frame_count frames (frame_count x vertex count
+ * x 3 positions) into destination (room for destination_floats, at least frame_count x vertex count x 3). */
+SEGMORPH_API segmorph_status segmorph_decoder_turn_normals(segmorph_decoder* decoder, const float* normals,
+                                                           const float* frames, size_t frame_count,
+                                                           float* destination, size_t destination_floats);
+
+/* Each vertex's unit geometric surface normal at its point (vertex count x 3 floats) in positions, or in the base
+ * mesh when positions is null (AnimationDecoder::surface_normals). */
+SEGMORPH_API segmorph_status segmorph_decoder_surface_normals(segmorph_decoder* decoder, const float* positions,
+                                                              float* destination, size_t destination_floats);
+
 /* The model of a version-4 stream, for a player that evaluates frames itself, on a GPU or a CPU, instead of decoding
  * them (docs/runtime.md, "Playing the model"; the same as the C++ API's AnimationDecoder::model_*, whose comments
  * give the formula). Frame f at vertex v of welded vertex w is

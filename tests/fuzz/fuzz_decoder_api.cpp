@@ -1,6 +1,7 @@
 // libFuzzer target: the runtime decoder's C API (include/segmorph/decoder_c.h) on arbitrary bytes. The first byte
 // chooses what is driven, the rest is the input:
-//   byte 0 % 4 == 0  an animation stream against fuzz_base_mesh.h's mesh, every clip whole (segmorph_decode_clip);
+//   byte 0 % 4 == 0  an animation stream against fuzz_base_mesh.h's mesh, every clip whole (segmorph_decode_clip),
+//                    the first clip's normals turned (segmorph_decoder_turn_normals);
 //                1  the same, then clip (byte 0 / 4) % clips again frame by frame after a seek, which must give the
 //                   same floats;
 //                2  kept targets (segmorph_decode_targets);
@@ -69,6 +70,14 @@ void animation(segmorph_decoder* decoder, uint8_t control, const uint8_t* data, 
     check(all_finite(whole[c]));
   }
   check(segmorph_decoder_next_clip(decoder) == clips);
+  if ((control & 3) == 0) {
+    // The normals of the first clip's frames, on the stream's welding whatever it is: finite.
+    std::vector<float> surface(frame_floats), normals(whole[0].size());
+    check(segmorph_decoder_surface_normals(decoder, nullptr, surface.data(), surface.size()) == SEGMORPH_STATUS_OK);
+    check(segmorph_decoder_turn_normals(decoder, surface.data(), whole[0].data(), whole[0].size() / frame_floats,
+                                        normals.data(), normals.size()) == SEGMORPH_STATUS_OK);
+    check(all_finite(surface) && all_finite(normals));
+  }
   if ((control & 3) != 1) return;
   // A clip again, frame by frame, after a seek back to it: the same floats.
   const size_t clip = size_t(control >> 2) % clips;

@@ -4,8 +4,10 @@
 //      page (web_pages/compare.js) loads each with GLTFLoader and the plugin, plays every clip with AnimationMixer and
 //      reads the positions three.js computes at every frame time with { playback: 'morph' } (GPU playback, the
 //      default, is web_gpu.mjs's); they must equal those of the file segmorph decode
-//      wrote, loaded without the plugin, within three's own float arithmetic (1e-5 of the scene's diagonal). Also
-//      with the plugin's streaming playback and with workers.
+//      wrote, loaded without the plugin, within three's own float arithmetic (1e-5 of the scene's diagonal), and so
+//      must the normals three.js shades with (within NORMAL_TOLERANCE_DEGREES: the decoded file stores each frame's
+//      normals as a difference from the base's, one rounding). Also with the plugin's streaming playback and with
+//      workers.
 //   2. A damaged and a truncated stream make the loader's promise reject with a message naming the extension, without
 //      a hang or a crashed page.
 //   3. The viewer (web/viewer) plays a compressed file dropped on it: its render is not empty and changes between two
@@ -30,6 +32,8 @@ if (!shared) {
 rmSync(work, { recursive: true, force: true });
 mkdirSync(work, { recursive: true });
 const RELATIVE_TOLERANCE = 1e-5;
+// The decoded file holds each frame's normals as a difference from the base's (one float rounding, about 3e-6 degrees).
+const NORMAL_TOLERANCE_DEGREES = 1e-4;
 let failures = 0;
 const fail = (message) => { console.error(`web_browser: FAIL: ${message}`); failures += 1; };
 const log = (message) => console.log(`web_browser: ${message}`);
@@ -79,8 +83,11 @@ try {
       const line = `${run.label}: ${result.meshes} meshes, ${result.clips.length} clips, ${result.frames} frame times, ` +
                    `largest difference ${result.maxError.toExponential(2)} (${relative.toExponential(2)} of the diagonal), ` +
                    `loaded in ${result.loadMilliseconds.toFixed(0)} ms`;
-      if (relative > RELATIVE_TOLERANCE || result.frames === 0) fail(line);
-      else log(line);
+      const normals = result.normalsCompared > 0
+        ? `, normals within ${result.maxNormalDegrees.toExponential(2)} degrees over ${result.normalsCompared} mesh-frames` : '';
+      if (relative > RELATIVE_TOLERANCE || result.frames === 0 || result.maxNormalDegrees > NORMAL_TOLERANCE_DEGREES)
+        fail(line + normals);
+      else log(line + normals);
     } catch (error) {
       fail(`${run.label}: ${error.message.split('\n')[0]}`);
     }

@@ -49,7 +49,6 @@ import { registerGLTFExtension, unregisterGLTFExtension } from '@babylonjs/loade
 import { NAME, checkClips, trackLayout } from '../gltf_extension.js';
 import { SegmorphDecoder } from '../segmorph_decoder.js';
 import { MODEL_GLSL, TEXEL_GLSL, TURN_GLSL, blendParameters, surfaceRings, textureWidth } from '../model_playback.js';
-import { SurfaceNormals } from '../surface_normals.js';
 
 export { SegmorphDecoder };
 
@@ -169,17 +168,17 @@ export class SegmorphExtension {
   async _keptTargets(meshes, extension, what) {
     const mesh = meshes[0];
     const { stream, positions, indices } = await this._inputs(mesh, extension, what);
-    const decoded = await this._named(what, () => SegmorphDecoder.decodeTargetsAsync(stream, positions, indices));
+    const baseNormals = this.options.normals ? floatsOf(mesh.getVerticesData(VertexBuffer.NormalKind, false, true)) : null;
+    const decoded = await this._named(what, () =>
+      SegmorphDecoder.decodeTargetsAsync(stream, positions, indices, baseNormals ?? undefined));
     const count = mesh.morphTargetManager?.numTargets ?? 0;
     if (decoded.targetCount !== count) throw new Error(`${what}: the stream holds ${decoded.targetCount} targets, the primitive has ${count}`);
-    const floats = positions.length, baseNormals = mesh.getVerticesData(VertexBuffer.NormalKind, false, true);
-    const normals = this.options.normals && baseNormals && new SurfaceNormals(positions, indices, baseNormals);
-    const shapes = [], turned = [];
+    const floats = positions.length, shapes = [], turned = [];
     for (let t = 0; t < count; ++t) {
       const shape = new Float32Array(floats);
       for (let i = 0; i < floats; ++i) shape[i] = positions[i] + decoded.deltas[t * floats + i];
       shapes.push(shape);
-      turned.push(normals ? normals.turned(shape) : null);
+      turned.push(decoded.normals ? decoded.normals.subarray(t * floats, (t + 1) * floats) : null);
     }
     for (const m of meshes) {
       const manager = m.morphTargetManager;
@@ -227,10 +226,11 @@ export class SegmorphExtension {
         return;
       }
     }
-    const decoded = await this._named(what, () => SegmorphDecoder.decodeStreamAsync(stream, positions, indices));
+    const baseNormals = this.options.normals ? floatsOf(mesh.getVerticesData(VertexBuffer.NormalKind, false, true)) : null;
+    const decoded = await this._named(what, () =>
+      SegmorphDecoder.decodeStreamAsync(stream, positions, indices, baseNormals ?? undefined));
     checkClips(decoded.clips.map((c) => c.frameCount), extension, times.map((t) => t.length), what);
-    const floats = positions.length, baseNormals = mesh.getVerticesData(VertexBuffer.NormalKind, false, true);
-    const normals = this.options.normals && baseNormals && new SurfaceNormals(positions, indices, baseNormals);
+    const floats = positions.length, normals = baseNormals !== null;
     // Every frame a target: at influence 1 on one target the position is that frame exactly.
     const manager = new MorphTargetManager(scene), targets = [];
     manager.areUpdatesFrozen = true;  // its texture made once, below
@@ -240,7 +240,7 @@ export class SegmorphExtension {
         const frame = clip.frames.slice(f * floats, (f + 1) * floats);
         const target = new MorphTarget(`${mesh.name} clip ${c} frame ${f}`, 0, scene);
         target.setPositions(frame);
-        if (normals) target.setNormals(normals.turned(frame));
+        if (normals) target.setNormals(clip.normals.slice(f * floats, (f + 1) * floats));
         manager.addTarget(target);
         targets.push(target);
         shown ??= { positions: frame, normals: normals ? target.getNormals() : null };
@@ -449,7 +449,7 @@ export class GpuPlayback {
     this.targets = Array.from({ length: F }, () => ({ influence: 0 }));
     this.shown = new Float64Array(F).fill(NaN);
     if (normals) {
-      const rings = surfaceRings(positions, indices, 4), ring = Float32Array.from(rings.ring);
+      const rings = surfaceRings(model, indices, 4), ring = Float32Array.from(rings.ring);
       this.triangleTexture = floatTexture(scene, rings.list, rings.entries);
       for (const mesh of meshes) {
         mesh.setVerticesData('segmorphSurface', rings.surface, false, 3);
@@ -539,6 +539,12 @@ function gpuUnplayable(scene, model, indices) {
 
 // Keys of the influence of frame f of a clip whose frames are at `times`: 1 at its time, 0 at its neighbours' and
 // at the clip's ends (held between them), in frames at `fps`.
+// A vertex buffer's data (Babylon's FloatArray, or null) as a Float32Array, as the decoder takes it.
+function floatsOf(data) {
+  if (!data) return null;
+  return data instanceof Float32Array ? data : Float32Array.from(data);
+}
+
 function oneHotKeys(times, f, fps, step) {
   const keys = [], last = times.length - 1;
   const key = (i, value) => keys.push(step ? { frame: times[i] * fps, value, interpolation: STEP } : { frame: times[i] * fps, value });

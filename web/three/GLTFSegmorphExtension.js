@@ -34,7 +34,6 @@ import {
 import { NAME, checkClips, trackLayout } from '../gltf_extension.js';
 import { SegmorphDecoder } from '../segmorph_decoder.js';
 import { MODEL_GLSL, TEXEL_GLSL, TURN_GLSL, blendParameters, surfaceRings, textureWidth } from '../model_playback.js';
-import { SurfaceNormals } from '../surface_normals.js';
 
 
 export class GLTFSegmorphExtension {
@@ -138,20 +137,18 @@ export class GLTFSegmorphExtension {
   async _keptTargets(meshes, extension, what) {
     const geometry = meshes[0].geometry;
     const { stream, positions, indices } = await this._inputs(geometry, extension, what);
-    const decoded = await this._timed(what, () => SegmorphDecoder.decodeTargetsAsync(stream, positions, indices));
+    const base = this.options.normals && geometry.morphAttributes.normal && geometry.getAttribute('normal')?.array;
+    const decoded = await this._timed(what, () =>
+      SegmorphDecoder.decodeTargetsAsync(stream, positions, indices, base || undefined));
     const targets = geometry.morphAttributes.position ?? [];
     if (decoded.targetCount !== targets.length)
       throw new Error(`${what}: the stream holds ${decoded.targetCount} targets, the primitive has ${targets.length}`);
     const floats = positions.length;
-    const normals = this.options.normals && geometry.morphAttributes.normal && geometry.getAttribute('normal') &&
-                    new SurfaceNormals(positions, indices, geometry.getAttribute('normal').array);
     for (let t = 0; t < targets.length; ++t) {
-      const deltas = decoded.deltas.slice(t * floats, (t + 1) * floats);
-      geometry.morphAttributes.position[t] = new BufferAttribute(deltas, 3);
-      if (!normals) continue;
-      const shape = new Float32Array(floats);
-      for (let i = 0; i < floats; ++i) shape[i] = positions[i] + deltas[i];
-      const turned = normals.turned(shape), base = geometry.getAttribute('normal').array;
+      geometry.morphAttributes.position[t] = new BufferAttribute(decoded.deltas.slice(t * floats, (t + 1) * floats), 3);
+      if (!decoded.normals) continue;
+      // Relative, as segmorph decode writes them: the turned normal minus the base's.
+      const turned = decoded.normals.slice(t * floats, (t + 1) * floats);
       for (let i = 0; i < floats; ++i) turned[i] -= base[i];
       geometry.morphAttributes.normal[t] = new BufferAttribute(turned, 3);
     }
@@ -184,18 +181,18 @@ export class GLTFSegmorphExtension {
         return;
       }
     }
-    const decoded = await this._timed(what, () => SegmorphDecoder.decodeStreamAsync(stream, positions, indices));
+    const normal = geometry.getAttribute('normal');
+    const normals = Boolean(this.options.normals && normal);
+    const decoded = await this._timed(what, () =>
+      SegmorphDecoder.decodeStreamAsync(stream, positions, indices, normals ? normal.array : undefined));
     checkClips(decoded.clips.map((c) => c.frameCount), extension, times.map((t) => t.count), what);
     this.playbacks.push({ what, mode: 'morph', version: decoded.version });
     // Every frame an absolute target: at weight 1 on one target the position is that frame exactly.
     const floats = positions.length, targets = [], normalTargets = [];
-    const normal = geometry.getAttribute('normal');
-    const normals = this.options.normals && normal && new SurfaceNormals(positions, indices, normal.array);
     for (const clip of decoded.clips)
       for (let f = 0; f < clip.frameCount; ++f) {
-        const frame = clip.frames.subarray(f * floats, (f + 1) * floats);
-        targets.push(new BufferAttribute(frame, 3));
-        if (normals) normalTargets.push(new BufferAttribute(normals.turned(frame), 3));
+        targets.push(new BufferAttribute(clip.frames.subarray(f * floats, (f + 1) * floats), 3));
+        if (normals) normalTargets.push(new BufferAttribute(clip.normals.subarray(f * floats, (f + 1) * floats), 3));
       }
     geometry.setAttribute('position', new BufferAttribute(decoded.clips[0].frames.slice(0, floats), 3));
     if (normals) geometry.setAttribute('normal', normalTargets[0].clone());
@@ -245,16 +242,17 @@ function addTrack(animations, index, track, what) {
 // plays at a time (no cross-fades: the numbers would blend).
 export class StreamingPlayback {
   constructor(stream, positions, indices, extension, times, meshes, normals) {
-    this.decoder = SegmorphDecoder.createStreamDecoder(stream, positions, indices);
+    const normal = meshes[0].geometry.getAttribute('normal');
+    this.normals = Boolean(normals && normal);
+    this.decoder = SegmorphDecoder.createStreamDecoder(stream, positions, indices, this.normals ? normal.array : undefined);
     this.frameCounts = Array.from({ length: this.decoder.clipCount }, (_, c) => this.decoder.frameCount(c));
     this.extension = extension;
     this.times = times;
     this.frames = [new Float32Array(positions.length), new Float32Array(positions.length)];
     this.clip = -1;
     this.decoded = -1;  // the last frame of this.clip decoded (frames[1]); frames[0] holds the one before it
-    const geometry = meshes[0].geometry, normal = geometry.getAttribute('normal');
+    const geometry = meshes[0].geometry;
     this.geometry = geometry;
-    this.normals = normals && normal && new SurfaceNormals(positions, indices, normal.array);
     geometry.setAttribute('position', new BufferAttribute(new Float32Array(positions.length), 3));
     if (this.normals) geometry.setAttribute('normal', new BufferAttribute(new Float32Array(positions.length), 3));
     this.shown = null;
@@ -310,7 +308,7 @@ export class StreamingPlayback {
     else for (let i = 0; i < out.length; ++i) out[i] = a[i] + u * (b[i] - a[i]);
     position.needsUpdate = true;
     if (this.normals) {
-      this.geometry.getAttribute('normal').array.set(this.normals.turned(out));
+      this.decoder.turnNormals(out, this.geometry.getAttribute('normal').array);
       this.geometry.getAttribute('normal').needsUpdate = true;
     }
   }
@@ -336,7 +334,7 @@ vec3 segmorphPosition( vec3 x ) {
 }
 `;
 
-// Normals that turn with the surface, as segmorph decode and the 'morph' playback turn them (SurfaceNormals): the
+// Normals that turn with the surface, as segmorph decode and the 'morph' playback turn them (turn_normals): the
 // base normal turned by the smallest rotation taking the base surface normal around the vertex's point (segmorphSurface,
 // the normalized sum of its triangles' cross products) to today's, summed over the same triangles (segmorphRing: the
 // first and the count of its entries in segmorphTriangles, each a triangle's three vertices) from segmorphShape, every
@@ -415,7 +413,7 @@ export class GpuPlayback {
     // Vertex indices are read from float textures: exact below 2^24.
     this.normals = normals && geometry.getAttribute('normal') !== undefined && V < 1 << 24;
     if (this.normals) {
-      const rings = surfaceRings(geometry.getAttribute('position').array, geometry.index.array, 3);
+      const rings = surfaceRings(model, geometry.index.array, 3);
       geometry.setAttribute('segmorphSurface', new BufferAttribute(rings.surface, 3));
       geometry.setAttribute('segmorphRing', new BufferAttribute(rings.ring, 2));  // Uint32: uvec2
       this.triangleTexture = dataTexture(rings.list, rings.entries, 3);

@@ -1,7 +1,9 @@
 // In the browser (tests/js/web_browser.mjs): a file written by segmorph encode, loaded by GLTFLoader with the plugin,
 // against the same file decoded by segmorph decode and loaded without it. Each clip is played with AnimationMixer and
 // the positions three.js computes (Mesh.getVertexPosition: morph targets and skinning applied, then the world matrix)
-// are compared at every key time of the decoded clip.
+// are compared at every key time of the decoded clip, and so are the normals it shades with (morph targets applied on
+// the CPU as its vertex shader applies them, object space, each normalized) where the plugin's are on the CPU (morph
+// targets and streaming playback): the plugin turns them through the decoder (turn_normals) as segmorph decode does.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
@@ -28,6 +30,37 @@ function positions(mesh, streaming) {
   return out;
 }
 
+// The normals three.js shades `mesh` with at its influences: its morph targets applied as its vertex shader applies
+// them (relative: base + Σ w·delta; absolute: base·(1 − Σ w) + Σ w·target), in object space, each normalized.
+function normals(mesh) {
+  const geometry = mesh.geometry, base = geometry.getAttribute('normal');
+  if (!base) return null;
+  const targets = geometry.morphAttributes.normal ?? [], weights = mesh.morphTargetInfluences ?? [];
+  const sum = weights.reduce((a, w) => a + w, 0), baseWeight = geometry.morphTargetsRelative ? 1 : 1 - sum;
+  const out = new Float64Array(base.count * 3);
+  for (let v = 0; v < base.count; ++v) {
+    let x = base.getX(v) * baseWeight, y = base.getY(v) * baseWeight, z = base.getZ(v) * baseWeight;
+    targets.forEach((target, t) => {
+      const w = weights[t] ?? 0;
+      if (w !== 0) x += w * target.getX(v), y += w * target.getY(v), z += w * target.getZ(v);
+    });
+    const length = Math.hypot(x, y, z) || 1;
+    out[v * 3] = x / length, out[v * 3 + 1] = y / length, out[v * 3 + 2] = z / length;
+  }
+  return out;
+}
+
+// The largest angle in degrees between two meshes' normals (vertices whose normals vanish left out).
+function largestAngle(a, b) {
+  let largest = 0;
+  for (let i = 0; i < a.length; i += 3) {
+    const cos = a[i] * b[i] + a[i + 1] * b[i + 1] + a[i + 2] * b[i + 2];
+    if (Math.hypot(a[i], a[i + 1], a[i + 2]) > 0.5 && Math.hypot(b[i], b[i + 1], b[i + 2]) > 0.5)
+      largest = Math.max(largest, Math.acos(Math.min(1, Math.max(-1, cos))) * 180 / Math.PI);
+  }
+  return largest;
+}
+
 window.compare = async (compressedUrl, decodedUrl, options = {}) => {
   if (options.workers) SegmorphDecoder.useWorkers(options.workers);
   const started = performance.now();
@@ -39,7 +72,9 @@ window.compare = async (compressedUrl, decodedUrl, options = {}) => {
   const diagonal = box.getSize(new THREE.Vector3()).length();
   if (compressed.animations.length !== decoded.animations.length)
     throw new Error(`${compressed.animations.length} clips with the plugin, ${decoded.animations.length} decoded`);
-  let maxError = 0, frames = 0;
+  // The plugin's normals are on the CPU unless it plays the model on the GPU (its default for version-4 streams).
+  const cpuNormals = options.streaming || options.playback === 'morph';
+  let maxError = 0, frames = 0, maxNormalDegrees = 0, normalsCompared = 0;
   const clips = [];
   for (let c = 0; c < decoded.animations.length; ++c) {
     const a = compressed.animations[c], b = decoded.animations[c];
@@ -57,6 +92,11 @@ window.compare = async (compressedUrl, decodedUrl, options = {}) => {
       for (const [meshA, meshB] of meshPairs) {
         const pa = positions(meshA, options.streaming), pb = positions(meshB, false);
         for (let i = 0; i < pa.length; ++i) clipError = Math.max(clipError, Math.abs(pa[i] - pb[i]));
+        const na = cpuNormals && normals(meshA), nb = na && normals(meshB);
+        if (nb && (meshA.geometry.morphAttributes.normal || options.streaming)) {
+          maxNormalDegrees = Math.max(maxNormalDegrees, largestAngle(na, nb));
+          normalsCompared += 1;
+        }
       }
       frames += 1;
     }
@@ -66,7 +106,8 @@ window.compare = async (compressedUrl, decodedUrl, options = {}) => {
     maxError = Math.max(maxError, clipError);
   }
   if (options.workers) SegmorphDecoder.useWorkers(0);
-  return { meshes: meshPairs.length, clips, frames, maxError, diagonal, loadMilliseconds };
+  return { meshes: meshPairs.length, clips, frames, maxError, diagonal, loadMilliseconds, maxNormalDegrees,
+           normalsCompared };
 };
 
 // The load of a file that must fail: its error message, or null when it loaded.
