@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <iomanip>
 #include <map>
+#include <sstream>
 
 #include "accessor.h"
 #include "bake.h"
@@ -132,11 +134,35 @@ double trajectory_gap(const std::vector<FrameSequence>& reference, const std::ve
   return total / double(samples);
 }
 
+// The root mean square distance of a primitive's positions from their frame's centroid, over the frames `frames`
+// names (per clip): the size of its shape, the KG error's scale.
+double shape_radius(const std::vector<FrameSequence>& clips, const std::vector<std::vector<size_t>>& frames) {
+  double sum = 0;
+  size_t count = 0;
+  for (size_t c = 0; c < frames.size(); ++c)
+    for (size_t f : frames[c]) {
+      const float* x = clips[c].frame(f);
+      const size_t vertices = clips[c].vertex_count;
+      double centroid[3] = {0, 0, 0};
+      for (size_t v = 0; v < vertices; ++v)
+        for (int k = 0; k < 3; ++k) centroid[k] += x[v * 3 + size_t(k)] / double(vertices);
+      for (size_t v = 0; v < vertices; ++v)
+        for (int k = 0; k < 3; ++k) sum += (x[v * 3 + size_t(k)] - centroid[k]) * (x[v * 3 + size_t(k)] - centroid[k]);
+      count += vertices;
+    }
+  return count > 0 ? std::sqrt(sum / double(count)) : 0.0;
+}
+
 // Each primitive of `want`'s counterpart (node, primitive) in the other file: the nearest over every node with a
-// mesh, screened on the first, middle and last frames of the first clips only.
+// mesh, screened on the first, middle and last frames of the first clips only. A primitive whose nearest
+// counterpart's screened vertices lie farther from its own, in root mean square over the screened frames, than
+// kUnpairedRadius times its shape's radius has none (bad_data naming it): the other file does not play it, and
+// comparing it with whatever lies nearest would report errors of an unrelated mesh.
+constexpr double kUnpairedRadius = 0.5;
 Status nearest_counterparts(const tinygltf::Model& other_model, const Scene& other_scene,
                             const std::vector<AnimatedNode>& other_nodes, const SampledNode& want,
-                            const std::vector<int>& clips, const std::vector<std::vector<float>>& times,
+                            const std::string& label, const std::vector<int>& clips,
+                            const std::vector<std::vector<float>>& times,
                             const std::function<Eigen::Matrix4d(const AnimatedNode&)>& to_reference,
                             std::vector<std::pair<const AnimatedNode*, size_t>>& pairs) {
   std::vector<std::vector<size_t>> screen_frames(times.size());
@@ -158,6 +184,19 @@ Status nearest_counterparts(const tinygltf::Model& other_model, const Scene& oth
             trajectory_gap(want.primitives[p].clips, screen_frames, screened.sampled.primitives[q].clips);
         if (gap < nearest[p]) nearest[p] = gap, pairs[p] = {&candidate, q};
       }
+  }
+  size_t screened = 0;
+  for (const std::vector<size_t>& frames : screen_frames) screened += frames.size();
+  for (size_t p = 0; p < want.primitives.size(); ++p) {
+    const double distance = std::sqrt(nearest[p] / double(std::max<size_t>(screened, 1)));
+    const double radius = shape_radius(want.primitives[p].clips, screen_frames);
+    if (pairs[p].first && distance <= kUnpairedRadius * radius) continue;
+    std::ostringstream nearest_text;
+    nearest_text << std::setprecision(3) << (radius > 0 ? distance / radius : INFINITY);
+    return Status(StatusCode::bad_data,
+                  "has no primitive that plays primitive " + std::to_string(p) + " of " + label +
+                      ": the nearest by trajectory is " + nearest_text.str() +
+                      " times its size away (the files do not play the same animation)");
   }
   return Status::Ok();
 }
@@ -223,7 +262,8 @@ void compare_node(const ComparisonInputs& in, const SampledNode& want, NodeCompa
     for (size_t p = 0; p < pairs.size(); ++p) pairs[p] = {&*same_node, p};
   } else {
     const Status found =
-        nearest_counterparts(in.other_model, in.other_scene, in.other_nodes, want, clips, times, to_reference, pairs);
+        nearest_counterparts(in.other_model, in.other_scene, in.other_nodes, want, label, clips, times, to_reference,
+                             pairs);
     if (!found.ok()) return fail(found);
   }
 
