@@ -77,21 +77,23 @@ CompressedPrimitive take_clips(tinygltf::Model& model, int host, AccessorWriter&
 
 }  // namespace
 
-CodecProgress codec_progress(const std::function<void(const std::string&)>& progress, const std::string& what) {
+CodecProgress codec_progress(const std::function<void(const std::string&)>& progress, const std::string& what,
+                             std::function<double()> clock) {
   if (!progress) return {};
-  using Clock = std::chrono::steady_clock;
+  if (!clock)
+    clock = [] { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); };
   struct Last {
-    Clock::time_point start = Clock::now(), time = start;  // the primitive's start, the last line's time
-    std::string stage;                                      // the last stage reported
+    double start = 0, time = 0;  // the primitive's start, the last line's time
+    std::string stage;           // the last stage reported
   };
   auto last = std::make_shared<Last>();  // the settings holding the callback are copied
-  return [progress, what, last](const std::string& stage, double fraction) {
-    const Clock::time_point now = Clock::now();
-    const bool quiet = std::chrono::duration<double>(now - last->start).count() < kCodecQuietSeconds;
+  last->start = last->time = clock();
+  return [progress, what, last, clock](const std::string& stage, double fraction) {
+    const double now = clock();
+    const bool quiet = now - last->start < kCodecQuietSeconds;
     const bool new_stage = stage != last->stage;
     last->stage = stage;
-    if (quiet || (!new_stage && std::chrono::duration<double>(now - last->time).count() < kCodecProgressSeconds))
-      return;
+    if (quiet || (!new_stage && now - last->time < kCodecProgressSeconds)) return;
     last->time = now;
     std::string line = what + ": " + stage;
     if (fraction >= 0) line += " (" + std::to_string(int(std::floor(100 * std::min(fraction, 1.0)))) + " %)";

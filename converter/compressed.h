@@ -28,7 +28,9 @@ struct CompressReport {
 // says nothing more than the line that announced it), then each new stage as it starts and the fraction done of a
 // stage at most every kCodecProgressSeconds.
 constexpr double kCodecQuietSeconds = 2.0, kCodecProgressSeconds = 2.0;
-CodecProgress codec_progress(const std::function<void(const std::string&)>& progress, const std::string& what);
+// `clock`: seconds on a monotonic clock (the steady clock when empty; tests give their own).
+CodecProgress codec_progress(const std::function<void(const std::string&)>& progress, const std::string& what,
+                             std::function<double()> clock = {});
 
 // `model` has just been baked (bake_model) from `sampled`. Replaces each baked primitive's morph targets by a
 // Draco base mesh and an animation stream encoded with `settings`.

@@ -53,7 +53,12 @@ void expect_bake_round_trip(const std::string& path, bool exact) {
   SCOPED_TRACE(path);
   Status status;
   std::unique_ptr<Sampled> original = sample_file(path, &status);
-  if (status.code() == StatusCode::nothing_to_do) return;  // e.g. morph targets without animation
+  // Only the file of morph targets without an animation has nothing to bake (before, any file that reported it
+  // passed: a regression that made every sample report it would have gone unseen).
+  if (path.find("MorphPrimitivesTest") != std::string::npos) {
+    EXPECT_EQ(status.code(), StatusCode::nothing_to_do) << status.message();
+    return;
+  }
   ASSERT_TRUE(status.ok()) << status.message();
 
   std::unique_ptr<Sampled> to_bake = sample_file(path, &status);

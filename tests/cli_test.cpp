@@ -1,10 +1,10 @@
 // The command-line tool as a user meets it: exit codes, one-line errors, no partial output.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -12,7 +12,6 @@
 #include <random>
 #include <regex>
 #include <sstream>
-#include <thread>
 
 #include "accessor.h"
 #include "gltf_io.h"
@@ -445,43 +444,65 @@ int processes_with_argument(const std::string& argument) {
   return count;
 }
 
-// Runs segmorph with `arguments`, sends it `signal_number` after `delay_ms` and returns its wait status (-1 when it
-// could not be started or waited for).
-int signal_after(const std::vector<std::string>& arguments, int delay_ms, int signal_number) {
+// Runs segmorph with `arguments` and sends it `signal_number` once a line of its stderr (its progress) contains
+// `line` ("" at once, before it starts), then returns its wait status (-1 when it could not be started or waited for).
+// No clock: the signal follows a stage's announcement, whatever the machine's speed.
+int signal_on_line(const std::vector<std::string>& arguments, const std::string& line, int signal_number) {
   std::vector<const char*> argv = {SEGMORPH_BINARY};
   for (const std::string& argument : arguments) argv.push_back(argument.c_str());
   argv.push_back(nullptr);
+  int pipe_ends[2];
+  if (pipe(pipe_ends) != 0) return -1;
   const pid_t pid = fork();
   if (pid < 0) return -1;
   if (pid == 0) {
+    dup2(pipe_ends[1], 2);
+    close(pipe_ends[0]);
+    close(pipe_ends[1]);
     execv(argv[0], const_cast<char* const*>(argv.data()));
     _exit(127);
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+  close(pipe_ends[1]);
+  std::string seen;
+  char buffer[256];
+  ssize_t got = 0;
+  while (!line.empty() && seen.find(line) == std::string::npos && (got = read(pipe_ends[0], buffer, sizeof buffer)) > 0)
+    seen.append(buffer, size_t(got));
   kill(pid, signal_number);
+  while (read(pipe_ends[0], buffer, sizeof buffer) > 0) {
+  }
+  close(pipe_ends[0]);
   int status = 0;
   return waitpid(pid, &status, 0) == pid ? status : -1;
 }
 
+// A named pipe with a glTF name: a process that opens it to read waits until a writer opens it (none does), so a
+// signal surely finds it before its end.
+std::string waiting_input(const std::string& directory) {
+  const std::string path = directory + "/waiting.glb";
+  EXPECT_EQ(mkfifo(path.c_str(), 0600), 0) << path;
+  return path;
+}
+
 // SIGINT or SIGTERM at any point of a bake (reading, baking, writing, done) leaves no temporary file, and either no
-// output or a whole one.
+// output or a whole one. The signal follows each stage's progress line (it may land in that stage or a later one, or
+// after the end: each outcome is checked), and one run waits for an input that never comes, which the signal must
+// interrupt (before: delays of 0 to 1500 ms, and a fast machine could finish before any).
 TEST(Cli, SignalsLeaveNoPartialOutput) {
   const std::string directory = output_directory("signals");
   const std::string output = directory + "/out.glb";
-  int interrupted = 0;
+  const std::string fox = sample("Fox/Fox.glb");
   for (int signal_number : {SIGTERM, SIGINT})
-    for (int delay_ms : {0, 20, 60, 120, 200, 300, 450, 700, 1000, 1500}) {
-      SCOPED_TRACE("signal " + std::to_string(signal_number) + " after " + std::to_string(delay_ms) + " ms");
-      const std::string fox = sample("Fox/Fox.glb");
-      const int status = signal_after({"bake", "-q", fox, "-o", output, "--fps", "120"}, delay_ms, signal_number);
+    for (const std::string stage : {"", "reading", "sampling", "writing", "baked"}) {
+      SCOPED_TRACE("signal " + std::to_string(signal_number) + " after \"" + stage + "\"");
+      const int status = signal_on_line({"bake", fox, "-o", output, "--fps", "120"}, stage, signal_number);
       ASSERT_GE(status, 0);
       std::vector<std::string> left;
       for (const auto& entry : fs::directory_iterator(directory)) left.push_back(entry.path().filename());
       if (WIFSIGNALED(status)) {
-        ++interrupted;
         EXPECT_EQ(WTERMSIG(status), signal_number);
-        // Before the rename nothing is left; a signal after it (between the rename and the exit, seen in the
-        // sanitizer build at 1000 ms) finds the output whole. Never a temporary file or a partial output.
+        // Before the rename nothing is left; a signal after it (between the rename and the exit) finds the output
+        // whole. Never a temporary file or a partial output.
         if (!left.empty()) {
           ASSERT_EQ(left, std::vector<std::string>{"out.glb"});
           EXPECT_EQ(run("info -q " + output).exit_code, 0) << "a whole file";
@@ -495,7 +516,13 @@ TEST(Cli, SignalsLeaveNoPartialOutput) {
       fs::remove_all(directory);
       fs::create_directories(directory);
     }
-  EXPECT_GT(interrupted, 0) << "no signal came before the end: the test did not test";
+  for (int signal_number : {SIGTERM, SIGINT}) {
+    const int status = signal_on_line({"bake", waiting_input(directory), "-o", output}, "reading", signal_number);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "a bake waiting for its input was not interrupted";
+    EXPECT_EQ(WTERMSIG(status), signal_number);
+    fs::remove(directory + "/waiting.glb");
+    EXPECT_TRUE(fs::is_empty(directory)) << "the interrupted bake left a file";
+  }
 }
 
 TEST(Cli, BakeWritesGlbAndGltfAndNothingElse) {
@@ -1392,32 +1419,32 @@ TEST(Cli, StandardInputAndOutput) {
 
 // SIGTERM to a batch reaches the files being written: when the batch has ended, none is left half written or as a
 // temporary file, and no process of the batch outlives it. (Ctrl-C reaches the whole process group anyway.) The
-// batch waits for its children: a test that gave them 300 ms failed in CI, where a child's temporary file was still
-// there (a child in a long fsync under load). The batch's processes are found by the output folder in their command
-// lines.
-// At 480 frames per second the batch takes 0.15-0.2 s in Release on an idle machine, more under the sanitizers (at 120
-// it ended within 62 ms, before the first signal).
+// batch waits for its children (a test that gave them 300 ms once failed in CI, where a child's temporary file was
+// still there: a child in a long fsync under load). The batch's processes are found by the output folder in their
+// command lines. The signal follows a progress line of the batch; with a third input that never comes, the batch
+// cannot end before it (before: delays of 50 to 700 ms, which a fast machine could outrun).
 TEST(Cli, SignalsStopABatchCleanly) {
   const std::string directory = output_directory("batch_signals");
-  int interrupted = 0;
-  for (int delay_ms : {50, 200, 400, 700}) {
-    SCOPED_TRACE("SIGTERM after " + std::to_string(delay_ms) + " ms");
-    const std::string fox = sample("Fox/Fox.glb"), rigged = sample("RiggedSimple/RiggedSimple.glb");
-    const std::string outputs = directory + "/out";
-    const int status = signal_after(
-        {"bake", "-q", fox, rigged, "--output-dir", outputs, "--fps", "480", "--jobs", "2"}, delay_ms, SIGTERM);
-    ASSERT_GE(status, 0);
-    interrupted += WIFSIGNALED(status);
-    EXPECT_EQ(processes_with_argument(outputs), 0) << "a process of the batch outlived it";
-    if (fs::exists(outputs))
-      for (const auto& entry : fs::directory_iterator(outputs)) {
-        const std::string name = entry.path().filename();
-        EXPECT_TRUE(name == "Fox.glb" || name == "RiggedSimple.glb") << name << " left";
-        EXPECT_EQ(run("info -q " + entry.path().string()).exit_code, 0) << name << " is not whole";
-      }
-    fs::remove_all(outputs);
-  }
-  EXPECT_GT(interrupted, 0) << "no signal came before the end: the test did not test";
+  const std::string fox = sample("Fox/Fox.glb"), rigged = sample("RiggedSimple/RiggedSimple.glb");
+  const std::string outputs = directory + "/out";
+  for (const std::string stage : {"", "reading", "sampling", "writing"})
+    for (bool waiting : {false, true}) {
+      SCOPED_TRACE("SIGTERM after \"" + stage + "\"" + (waiting ? ", an input waiting" : ""));
+      std::vector<std::string> arguments = {"bake", fox, rigged, "--output-dir", outputs, "--fps", "480", "--jobs", "2"};
+      if (waiting) arguments.insert(arguments.begin() + 3, waiting_input(directory));
+      const int status = signal_on_line(arguments, stage, SIGTERM);
+      ASSERT_GE(status, 0);
+      if (waiting) EXPECT_TRUE(WIFSIGNALED(status)) << "a batch waiting for an input was not interrupted";
+      EXPECT_EQ(processes_with_argument(outputs), 0) << "a process of the batch outlived it";
+      if (fs::exists(outputs))
+        for (const auto& entry : fs::directory_iterator(outputs)) {
+          const std::string name = entry.path().filename();
+          EXPECT_TRUE(name == "Fox.glb" || name == "RiggedSimple.glb") << name << " left";
+          EXPECT_EQ(run("info -q " + entry.path().string()).exit_code, 0) << name << " is not whole";
+        }
+      fs::remove_all(outputs);
+      fs::remove(directory + "/waiting.glb");
+    }
 }
 
 // The kept skins' error search says what it measures as it goes (before: silent for over a minute on a large
