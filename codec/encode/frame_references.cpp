@@ -22,6 +22,31 @@ constexpr size_t kCoarseSample = 256;
 constexpr size_t kSample = 512;
 constexpr size_t kFinalists = 2;
 
+// The positions the scores read: every stride-th of the traversal (sampled), and those whose residuals their scores
+// read, with spatial residuals their earlier neighbours too (needed; needed_index: each position's place there, or
+// UINT32_MAX).
+struct ScoredPositions {
+  std::vector<uint32_t> sampled, needed_index, needed;
+};
+
+ScoredPositions scored_positions(const ResidualTraversal& traversal, size_t welded, bool spatial) {
+  ScoredPositions out;
+  out.needed_index.assign(welded, UINT32_MAX);
+  auto need = [&](uint32_t position) {
+    if (out.needed_index[position] == UINT32_MAX)
+      out.needed_index[position] = uint32_t(out.needed.size()), out.needed.push_back(position);
+  };
+  const size_t stride = std::max<size_t>(1, welded / kSample);
+  for (size_t position = 0; position < welded; position += stride) {
+    out.sampled.push_back(uint32_t(position));
+    need(uint32_t(position));
+    if (spatial)
+      for (uint32_t j = traversal.earlier_offset[position]; j < traversal.earlier_offset[position + 1]; ++j)
+        need(traversal.earlier[j]);
+  }
+  return out;
+}
+
 }  // namespace
 
 uint32_t largest_reference_window(size_t vertices) {
@@ -37,20 +62,10 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
   const size_t welded = content.welded_count, frame_count = content.frame_count();
   chosen.references.assign(frame_count, 0);
   const bool spatial = content.flags & format::kFlagSpatialResiduals;
-  // The sampled positions (every stride-th in the traversal), and the positions whose residuals their scores read.
-  const size_t stride = std::max<size_t>(1, welded / kSample);
-  std::vector<uint32_t> sampled, needed_index(welded, UINT32_MAX), needed;
-  auto need = [&](uint32_t position) {
-    if (needed_index[position] == UINT32_MAX)
-      needed_index[position] = uint32_t(needed.size()), needed.push_back(position);
-  };
-  for (size_t position = 0; position < welded; position += stride) {
-    sampled.push_back(uint32_t(position));
-    need(uint32_t(position));
-    if (spatial)
-      for (uint32_t j = traversal.earlier_offset[position]; j < traversal.earlier_offset[position + 1]; ++j)
-        need(traversal.earlier[j]);
-  }
+  const ScoredPositions positions = scored_positions(traversal, welded, spatial);
+  const std::vector<uint32_t>& sampled = positions.sampled;
+  const std::vector<uint32_t>& needed_index = positions.needed_index;
+  const std::vector<uint32_t>& needed = positions.needed;
   const size_t coarse_stride = std::max<size_t>(1, sampled.size() / kCoarseSample);
 
   // Open-loop residuals of the needed positions, frame by frame, the last max_window + 1 frames in a ring.

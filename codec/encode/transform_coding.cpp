@@ -276,6 +276,78 @@ Matrix basis_values(const StreamContent::Basis& basis, size_t m, size_t frames) 
   return values;
 }
 
+// The trajectories to code: row w × 3 + a, the frames' positions minus the prediction of the content's quantized
+// motion and weights.
+Rows residual_rows(const EncodeProblem& problem, const StreamContent& content) {
+  const size_t welded = content.welded_count, frames = content.frame_count();
+  Rows rows(Eigen::Index(welded * 3), Eigen::Index(frames));
+  const FramePredictions predictions(content, problem.base_welded);
+  std::vector<double> predicted(welded * 3);
+  for (size_t f = 0; f < frames; ++f) {
+    predictions.predict(f, predicted.data());
+    const float* positions = &problem.trajectories.positions[f * welded * 3];
+    for (size_t i = 0; i < welded * 3; ++i)
+      rows(Eigen::Index(i), Eigen::Index(f)) = float(double(positions[i]) - predicted[i]);
+  }
+  return rows;
+}
+
+// `choice`'s bases, quantized, and its per-cluster sources, sizes and steps into `content`.
+void with_bases(const Choice& choice, const Matrix& stream_basis, const std::vector<std::vector<double>>& stream_energy,
+                const std::vector<Matrix>& own_basis, const std::vector<std::vector<double>>& own_energy,
+                StreamContent& content) {
+  const size_t clusters = content.cluster_count;
+  std::vector<double> energy(choice.stream_vectors, 0.0);
+  for (size_t k = 0; k < clusters; ++k)
+    if (choice.per_cluster[k].source == format::kBasisStream)
+      for (size_t i = 0; i < choice.per_cluster[k].m; ++i) energy[i] += stream_energy[k][i];
+  content.stream_basis = quantized_basis(stream_basis, choice.stream_vectors, energy, choice.lambda);
+  content.basis_source.assign(clusters, format::kBasisNone);
+  content.basis_size.assign(clusters, 0);
+  content.coefficient_step.assign(clusters, 0.0f);
+  content.own_basis.assign(clusters, StreamContent::Basis());
+  for (size_t k = 0; k < clusters; ++k) {
+    const Option& o = choice.per_cluster[k];
+    content.basis_source[k] = o.source;
+    content.basis_size[k] = uint32_t(o.m);
+    content.coefficient_step[k] = float(o.step);
+    if (o.source == format::kBasisOwn)
+      content.own_basis[k] = quantized_basis(own_basis[k], o.m, own_energy[k], choice.lambda);
+  }
+}
+
+// The coefficients of every cluster's rows: least squares against its basis as the decoder has it (stream_values:
+// the stream basis's), then quantized by its step. False when one lies beyond the format's limit.
+bool fit_coefficients(const EncodeProblem& problem, const StreamContent& content, const Rows& rows,
+                      const std::vector<std::vector<Eigen::Index>>& members, const Matrix& stream_values,
+                      TransformCoefficients& coefficients) {
+  const size_t frames = content.frame_count();
+  coefficients = transform_layout(content);
+  for (size_t k = 0; k < content.cluster_count; ++k) {
+    const size_t m = content.basis_size[k];
+    if (m == 0) continue;
+    const Matrix values = content.basis_source[k] == format::kBasisOwn ? basis_values(content.own_basis[k], m, frames)
+                                                                       : Matrix(stream_values.topRows(Eigen::Index(m)));
+    const Eigen::LDLT<Eigen::MatrixXd> gram(values * values.transpose());
+    const double step = double(content.coefficient_step[k]);
+    std::vector<char> fits(members[k].size(), 1);  // per row: every coefficient within the format's limit
+    parallel_ranges(members[k].size(), thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
+      for (size_t j = begin; j < end; ++j) {
+        const Eigen::Index r = members[k][j];
+        const Eigen::VectorXd c = gram.solve(Eigen::VectorXd(values * rows.row(r).transpose().cast<double>()));
+        const size_t w = size_t(r) / 3, a = size_t(r) % 3;
+        for (size_t i = 0; i < m; ++i) {
+          const double q = std::round(c(Eigen::Index(i)) / step);
+          if (!(std::abs(q) <= double(format::kMaxTransformValue))) fits[j] = 0;
+          coefficients.values[coefficients.offset[w] + a * m + i] = fits[j] ? int32_t(q) : 0;
+        }
+      }
+    });
+    if (std::find(fits.begin(), fits.end(), 0) != fits.end()) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 bool transform_content(const EncodeProblem& problem, StreamContent content, double budget, std::vector<uint8_t>& stream,
@@ -288,18 +360,7 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
   content.residuals = std::vector<int64_t>();
   content.narrow_residuals = std::vector<int32_t>();
   for (float& step : content.residual_step) step = 0;
-  // The trajectories: row w × 3 + a, the frames' positions minus the prediction of the quantized motion and weights.
-  Rows rows(Eigen::Index(welded * 3), Eigen::Index(frames));
-  {
-    const FramePredictions predictions(content, problem.base_welded);
-    std::vector<double> predicted(welded * 3);
-    for (size_t f = 0; f < frames; ++f) {
-      predictions.predict(f, predicted.data());
-      const float* positions = &problem.trajectories.positions[f * welded * 3];
-      for (size_t i = 0; i < welded * 3; ++i)
-        rows(Eigen::Index(i), Eigen::Index(f)) = float(double(positions[i]) - predicted[i]);
-    }
-  }
+  const Rows rows = residual_rows(problem, content);
   std::vector<double> weight(welded * 3);
   for (size_t i = 0; i < weight.size(); ++i) weight[i] = double(problem.multiplicity[i / 3]);
   const double unit = std::sqrt(12 * budget / (3.0 * double(content.vertex_count) * double(frames)));
@@ -358,24 +419,8 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
     const Choice choice = choose(options, target, basis_size_list, bits_per_vector);
     if (std::isinf(choice.bits)) return false;
     transformed = content;
-    std::vector<double> energy(choice.stream_vectors, 0.0);
-    for (size_t k = 0; k < clusters; ++k)
-      if (choice.per_cluster[k].source == format::kBasisStream)
-        for (size_t i = 0; i < choice.per_cluster[k].m; ++i) energy[i] += stream_energy[k][i];
-    transformed.stream_basis = quantized_basis(stream_basis, choice.stream_vectors, energy, choice.lambda);
+    with_bases(choice, stream_basis, stream_energy, own_basis, own_energy, transformed);
     const Matrix stream_values = basis_values(transformed.stream_basis, choice.stream_vectors, frames);
-    transformed.basis_source.assign(clusters, format::kBasisNone);
-    transformed.basis_size.assign(clusters, 0);
-    transformed.coefficient_step.assign(clusters, 0.0f);
-    transformed.own_basis.assign(clusters, StreamContent::Basis());
-    for (size_t k = 0; k < clusters; ++k) {
-      const Option& o = choice.per_cluster[k];
-      transformed.basis_source[k] = o.source;
-      transformed.basis_size[k] = uint32_t(o.m);
-      transformed.coefficient_step[k] = float(o.step);
-      if (o.source == format::kBasisOwn)
-        transformed.own_basis[k] = quantized_basis(own_basis[k], o.m, own_energy[k], choice.lambda);
-    }
     // The format's limits on the bases' entries and the coefficients (beyond them, the residual loop stays).
     uint64_t vectors = choice.stream_vectors, count = 0;
     for (size_t k = 0; k < clusters; ++k) {
@@ -383,31 +428,8 @@ bool transform_content(const EncodeProblem& problem, StreamContent content, doub
       count += uint64_t(transformed.basis_size[k]) * members[k].size();  // members: 3 rows per welded vertex
     }
     if (vectors * frames > format::kMaxBasisEntries || count > format::kMaxTransformCoefficients) return false;
-    // The coefficients: least squares against the basis as the decoder has it, then quantized.
-    TransformCoefficients coefficients = transform_layout(transformed);
-    for (size_t k = 0; k < clusters; ++k) {
-      const size_t m = transformed.basis_size[k];
-      if (m == 0) continue;
-      const Matrix values = transformed.basis_source[k] == format::kBasisOwn
-                                ? basis_values(transformed.own_basis[k], m, frames)
-                                : Matrix(stream_values.topRows(Eigen::Index(m)));
-      const Eigen::LDLT<Eigen::MatrixXd> gram(values * values.transpose());
-      const double step = double(transformed.coefficient_step[k]);
-      std::vector<char> fits(members[k].size(), 1);  // per row: every coefficient within the format's limit
-      parallel_ranges(members[k].size(), thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
-        for (size_t j = begin; j < end; ++j) {
-          const Eigen::Index r = members[k][j];
-          const Eigen::VectorXd c = gram.solve(Eigen::VectorXd(values * rows.row(r).transpose().cast<double>()));
-          const size_t w = size_t(r) / 3, a = size_t(r) % 3;
-          for (size_t i = 0; i < m; ++i) {
-            const double q = std::round(c(Eigen::Index(i)) / step);
-            if (!(std::abs(q) <= double(format::kMaxTransformValue))) fits[j] = 0;
-            coefficients.values[coefficients.offset[w] + a * m + i] = fits[j] ? int32_t(q) : 0;
-          }
-        }
-      });
-      if (std::find(fits.begin(), fits.end(), 0) != fits.end()) return false;
-    }
+    TransformCoefficients coefficients;
+    if (!fit_coefficients(problem, transformed, rows, members, stream_values, coefficients)) return false;
     transformed.coefficient_symbols = transform_symbols(transformed, problem.traversal, coefficients);
     // The frames as the decoder makes them, and their error.
     double error = 0;
