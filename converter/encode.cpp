@@ -9,6 +9,7 @@
 
 #include "bake.h"
 #include "comparison.h"
+#include "encode/metrics.h"
 #include "encode/rate_target.h"
 #include "gltf_io.h"
 #include "kept_skins.h"
@@ -139,10 +140,10 @@ Status encode_model(const SampledFile& file, const std::vector<bool>& keep, cons
   if (codec.mode != RateMode::bpvf) return Status::Ok();
   const double frames = vertex_frames(file.sampled);
   const size_t coded = out.report.draco_bytes + out.report.animation_bytes, whole = glb_size(out.model);
-  const double rest = 8.0 * double(whole > coded ? whole - coded : 0) / frames;
+  const double rest = bits_per_vertex_frame(whole > coded ? whole - coded : 0, frames);
   char figures[200];
   std::snprintf(figures, sizeof(figures), "%.3f bpvf, of which %.3f outside the animation streams and base meshes",
-                8.0 * double(whole) / frames, rest);
+                bits_per_vertex_frame(whole, frames), rest);
   if (rest >= codec.target) {
     char rate[32];
     std::snprintf(rate, sizeof(rate), "%g", codec.target);
@@ -155,7 +156,7 @@ Status encode_model(const SampledFile& file, const std::vector<bool>& keep, cons
   CodecSettings streams = codec;  // the streams' and base meshes' share of it
   streams.target -= rest;
   SEGMORPH_RETURN_IF_ERROR(encode_model_once(file, keep, streams, choices, progress, out));
-  const double reached = 8.0 * double(glb_size(out.model)) / frames;
+  const double reached = bits_per_vertex_frame(glb_size(out.model), frames);
   if (reached > kBpvfTolerance * codec.target) {
     char line[200];
     std::snprintf(line, sizeof(line), "warning: --bpvf %g is out of reach for this file: it comes to %.3f bpvf",

@@ -23,19 +23,11 @@
 #include "json_prepass.h"
 #include "output_file.h"
 #include "segmorph/version.h"
+#include "file_names.h"
 #include "segmorph_extension.h"
 
 namespace segmorph {
 namespace {
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && lower(s.substr(s.size() - suffix.size())) == suffix;
-}
 
 // tinygltf's messages may span lines; errors are reported on one.
 std::string one_line(std::string s) {
@@ -69,10 +61,10 @@ std::string mime_of_uri(const std::string& uri) {
     const size_t end = uri.find_first_of(";,");
     return end == std::string::npos ? "" : uri.substr(5, end - 5);
   }
-  if (ends_with(uri, ".png")) return "image/png";
-  if (ends_with(uri, ".jpg") || ends_with(uri, ".jpeg")) return "image/jpeg";
-  if (ends_with(uri, ".webp")) return "image/webp";
-  if (ends_with(uri, ".ktx2")) return "image/ktx2";
+  if (has_suffix(uri, ".png")) return "image/png";
+  if (has_suffix(uri, ".jpg") || has_suffix(uri, ".jpeg")) return "image/jpeg";
+  if (has_suffix(uri, ".webp")) return "image/webp";
+  if (has_suffix(uri, ".ktx2")) return "image/ktx2";
   return "";
 }
 
@@ -274,7 +266,7 @@ void shorten_float_numbers(tinygltf::Model& model) {
 }  // namespace
 
 bool has_gltf_extension(const std::string& path) {
-  return ends_with(path, ".glb") || ends_with(path, ".gltf");
+  return has_suffix(path, ".glb") || has_suffix(path, ".gltf");
 }
 
 Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<std::string>* warnings) {
@@ -327,6 +319,9 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
           ? loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(bytes.data()),
                                         unsigned(bytes.size()), directory)
           : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), unsigned(bytes.size()), directory);
+  // tinygltf catches a failed allocation of its JSON parser and says so in its message.
+  if (!loaded && error.find("bad_alloc") != std::string::npos)
+    return Status(StatusCode::out_of_memory, "out of memory while parsing the glTF JSON");
   if (!loaded) return Status(StatusCode::bad_data, "cannot parse glTF: " + one_line(error.empty() ? warning : error));
   if (warnings && !warning.empty()) warnings->push_back(one_line(warning));
 
@@ -646,10 +641,7 @@ size_t glb_delivered_estimate(tinygltf::Model model, size_t* size) {
   if (size) *size = glb.size();
   if (glb.empty()) return 0;
   const auto* bytes = reinterpret_cast<const unsigned char*>(glb.data());
-  auto u32 = [&](size_t at) {
-    return uint32_t(bytes[at]) | uint32_t(bytes[at + 1]) << 8 | uint32_t(bytes[at + 2]) << 16 |
-           uint32_t(bytes[at + 3]) << 24;
-  };
+  auto u32 = [&](size_t at) { return read_u32(bytes + at); };
   if (glb.size() < 20) return glb.size();
   const size_t json = u32(12);
   double estimate = 20 + compressed_estimate(bytes + 20, std::min(json, glb.size() - 20));
@@ -733,8 +725,8 @@ void write_le32(std::ostream& out, uint32_t value) {
 }  // namespace
 
 Status save_gltf(tinygltf::Model& model, const std::string& path) {
-  const bool binary = ends_with(path, ".glb") || path == "-";  // the standard output takes a .glb
-  if (!binary && !ends_with(path, ".gltf"))
+  const bool binary = has_suffix(path, ".glb") || path == "-";  // the standard output takes a .glb
+  if (!binary && !has_suffix(path, ".gltf"))
     return Status(StatusCode::invalid_argument, "output must end in .glb or .gltf");
   const std::vector<tinygltf::BufferView> packed = prune(model);
   shorten_float_numbers(model);

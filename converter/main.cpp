@@ -13,6 +13,8 @@
 
 #include "batch.h"
 #include "command_line.h"
+#include "encode/metrics.h"
+#include "file_names.h"
 #include "output_file.h"
 #include "segmorph/segmorph.h"
 #include "segmorph/version.h"
@@ -90,14 +92,6 @@ bool is_obj_sequence(const std::string& path) {
   struct stat info {};
   if (stat(path.c_str(), &info) == 0) return S_ISDIR(info.st_mode);
   return path.find('%') != std::string::npos && !has_gltf_extension(path);
-}
-
-bool has_suffix(const std::string& path, const char* suffix) {
-  const size_t n = std::strlen(suffix);
-  if (path.size() < n) return false;
-  for (size_t i = 0; i < n; ++i)
-    if (std::tolower((unsigned char)path[path.size() - n + i]) != suffix[i]) return false;
-  return true;
 }
 
 // Reads input `index` into `model`: a glTF file, or a vertex cache (an OBJ sequence, or a base mesh with its point
@@ -327,7 +321,7 @@ int run_encode(const CommandLine& options) {
     const double stage[5] = {r.ms_segmentation, r.ms_motion, r.ms_prediction, r.ms_rate_control, r.ms_entropy};
     for (int i = 0; i < 5; ++i) ms[i] += stage[i];
   }
-  const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
+  const double bpvf = bits_per_vertex_frame(bytes, vertex_frames);
   if (options.json) {
     std::fprintf(out, 
         "{\"file\":%s,\"output\":%s,\"bytes\":%zu,\"bpvf\":%.4f,\"bpvf_animation\":%.4f,\"kg_percent\":%.6g,"
@@ -336,7 +330,7 @@ int run_encode(const CommandLine& options) {
         "\"motion\":%.1f,\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"draco\":%.1f,\"tracks\":%.1f,"
         "\"measure\":%.1f},\"primitives\":%s}\n",
         json_string(path).c_str(), json_string(options.output).c_str(), bytes, bpvf,
-        vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0, report.kg_percent,
+        bits_per_vertex_frame(report.animation_bytes, vertex_frames), report.kg_percent,
         report.rmse_over_diagonal, report.max_error_over_diagonal, report.draco_bytes, report.animation_bytes,
         report.streams.size(), clusters, e_pi_morse, e_pi, ms[0], ms[1], ms[2], ms[3], ms[4], report.ms_draco,
         report.ms_tracks, report.ms_measure, encoded_primitives_json(report).c_str());
@@ -401,8 +395,8 @@ int run_verify(const CommandLine& options) {
   // The standard input's size is that of the file as a .glb.
   const size_t bytes = input_bytes(1, options, compressed);
   const double vertex_frames = report.vertex_frames;
-  const double bpvf = vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0;
-  const double bpvf_animation = vertex_frames > 0 ? 8.0 * double(report.animation_bytes) / vertex_frames : 0;
+  const double bpvf = bits_per_vertex_frame(bytes, vertex_frames);
+  const double bpvf_animation = bits_per_vertex_frame(report.animation_bytes, vertex_frames);
   // The gate: the first bound exceeded, in one line.
   std::string above;
   char line[512];

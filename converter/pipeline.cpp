@@ -30,11 +30,15 @@ Model& Model::operator=(Model&& other) noexcept {
 }
 
 Status Model::load(const std::string& path, Model& model, std::vector<std::string>* warnings) {
-  model = Model();
-  return load_gltf(path, model.data().gltf, warnings);
+  return guarded([&] {
+    model = Model();
+    return load_gltf(path, model.data().gltf, warnings);
+  });
 }
 
-Status Model::save(const std::string& path) { return save_gltf(data_->gltf, path); }
+Status Model::save(const std::string& path) {
+  return guarded([&] { return save_gltf(data_->gltf, path); });
+}
 
 size_t Model::glb_size() const { return segmorph::glb_size(data_->gltf); }
 
@@ -126,131 +130,145 @@ const char* mode_name(PrimitiveMode mode) {
 }
 
 Status info(const Model& model, const SampleSettings& settings, InfoReport& report, const Progress& progress) {
-  const tinygltf::Model& encoded = model.data().gltf;
-  SampledFile file;
-  SEGMORPH_RETURN_IF_ERROR(analyze_model(encoded, settings, true, progress, file));
-  report = InfoReport();
-  report.animations = file.model.animations.size();
-  for (const SampledNode& node : file.sampled) {
-    const AnimatedNode& animated = *node.node;
-    for (const SampledPrimitive& primitive : node.primitives) {
-      const FrameSequence& first = primitive.clips[0];
-      const WeldedTopology topology = weld_topology(primitive.clips);
-      PrimitiveInfo out;
-      out.node = animated.node;
-      out.node_name = file.model.nodes[size_t(animated.node)].name;
-      out.mesh = animated.mesh;
-      out.primitive = primitive.primitive;
-      out.kind = animated.kind();
-      out.vertices = first.vertex_count;
-      out.triangles = first.triangle_count();
-      out.welded_vertices = topology.welded_count();
-      out.connected_components = topology.component_count;
-      // The decoded file may give the node a new mesh: the node's mesh in the encoded file holds the stream.
-      const int node_mesh = size_t(out.node) < encoded.nodes.size() ? encoded.nodes[size_t(out.node)].mesh : -1;
-      const StreamKind stream = compressed_stream_kind(encoded, node_mesh, out.primitive);
-      out.stream_version = stream.version;
-      out.kept_targets = stream.kept_targets;
-      out.gpu_playable = stream.gpu_playable();
-      for (size_t c = 0; c < primitive.clips.size(); ++c) {
-        const FrameSequence& clip = primitive.clips[c];
-        const Clip& source = file.scene.clips[size_t(animated.clips[c])];
-        out.clips.push_back({source.animation, source.name, clip.frame_count,
-                             double(clip.times.back()) - double(clip.times.front()),
-                             clip.frame_count * clip.vertex_count * 3 * sizeof(float)});
+  return guarded([&]() -> Status {
+    const tinygltf::Model& encoded = model.data().gltf;
+    SampledFile file;
+    SEGMORPH_RETURN_IF_ERROR(analyze_model(encoded, settings, true, progress, file));
+    report = InfoReport();
+    report.animations = file.model.animations.size();
+    for (const SampledNode& node : file.sampled) {
+      const AnimatedNode& animated = *node.node;
+      for (const SampledPrimitive& primitive : node.primitives) {
+        const FrameSequence& first = primitive.clips[0];
+        const WeldedTopology topology = weld_topology(primitive.clips);
+        PrimitiveInfo out;
+        out.node = animated.node;
+        out.node_name = file.model.nodes[size_t(animated.node)].name;
+        out.mesh = animated.mesh;
+        out.primitive = primitive.primitive;
+        out.kind = animated.kind();
+        out.vertices = first.vertex_count;
+        out.triangles = first.triangle_count();
+        out.welded_vertices = topology.welded_count();
+        out.connected_components = topology.component_count;
+        // The decoded file may give the node a new mesh: the node's mesh in the encoded file holds the stream.
+        const int node_mesh = size_t(out.node) < encoded.nodes.size() ? encoded.nodes[size_t(out.node)].mesh : -1;
+        const StreamKind stream = compressed_stream_kind(encoded, node_mesh, out.primitive);
+        out.stream_version = stream.version;
+        out.kept_targets = stream.kept_targets;
+        out.gpu_playable = stream.gpu_playable();
+        for (size_t c = 0; c < primitive.clips.size(); ++c) {
+          const FrameSequence& clip = primitive.clips[c];
+          const Clip& source = file.scene.clips[size_t(animated.clips[c])];
+          out.clips.push_back({source.animation, source.name, clip.frame_count,
+                               double(clip.times.back()) - double(clip.times.front()),
+                               clip.frame_count * clip.vertex_count * 3 * sizeof(float)});
+        }
+        report.primitives.push_back(std::move(out));
       }
-      report.primitives.push_back(std::move(out));
     }
-  }
-  return Status::Ok();
+    return Status::Ok();
+  });
 }
 
 Status bake(Model& model, const SampleSettings& settings, BakeReport* report, const Progress& progress) {
-  // The model is baked in place (a copy would hold the input twice), and each node is sampled just before it is
-  // baked: the frames of one node are held at a time.
-  BakeReport local;
-  BakeReport& out = report ? *report : local;
-  out = BakeReport();
-  SampledFile file;
-  Status status = analyze_model(std::move(model.data().gltf), settings, false, progress, file);
-  const Scene& scene = file.scene;
-  out.nodes = scene.animated.size();
-  auto sample = [&](size_t i, SampledNode& node) {
-    report_progress(progress, "sampling and baking " + node_name(file.model, scene.animated[i].node) + " (" +
-                                  std::to_string(i + 1) + "/" + std::to_string(scene.animated.size()) + ")");
-    SEGMORPH_RETURN_IF_ERROR(sample_node(file.model, scene, scene.animated[i], settings, node));
-    for (const FrameSequence& clip : node.primitives[0].clips) out.frames += clip.frame_count;
-    return Status::Ok();
-  };
-  if (status.ok()) status = bake_model(file.model, scene, sample, baked_bytes(file.model, scene, settings));
-  if (status.ok()) name_generator(file.model);
-  model.data().gltf = status.ok() ? std::move(file.model) : tinygltf::Model();
-  return status;
+  const Status baked = guarded([&]() -> Status {
+    // The model is baked in place (a copy would hold the input twice), and each node is sampled just before it is
+    // baked: the frames of one node are held at a time.
+    BakeReport local;
+    BakeReport& out = report ? *report : local;
+    out = BakeReport();
+    SampledFile file;
+    Status status = analyze_model(std::move(model.data().gltf), settings, false, progress, file);
+    const Scene& scene = file.scene;
+    out.nodes = scene.animated.size();
+    auto sample = [&](size_t i, SampledNode& node) {
+      report_progress(progress, "sampling and baking " + node_name(file.model, scene.animated[i].node) + " (" +
+                                    std::to_string(i + 1) + "/" + std::to_string(scene.animated.size()) + ")");
+      SEGMORPH_RETURN_IF_ERROR(sample_node(file.model, scene, scene.animated[i], settings, node));
+      for (const FrameSequence& clip : node.primitives[0].clips) out.frames += clip.frame_count;
+      return Status::Ok();
+    };
+    if (status.ok()) status = bake_model(file.model, scene, sample, baked_bytes(file.model, scene, settings));
+    if (status.ok()) name_generator(file.model);
+    model.data().gltf = status.ok() ? std::move(file.model) : tinygltf::Model();
+    return status;
+  });
+  if (!baked.ok()) model.data().gltf = tinygltf::Model();  // also after an exception mid-bake
+  return baked;
 }
 
 Status encode(const Model& input, const EncodeSettings& settings, Model& output, EncodeReport* report,
               const Progress& progress) {
-  return encode(Model(input), settings, output, report, progress);
+  return guarded([&] { return encode(Model(input), settings, output, report, progress); });  // the copy too
 }
 
 Status encode(Model&& input, const EncodeSettings& settings, Model& output, EncodeReport* report,
               const Progress& progress) {
-  SampledFile file;
-  tinygltf::Model gltf = std::move(input.data().gltf);
-  input = Model();
-  SEGMORPH_RETURN_IF_ERROR(analyze_model(std::move(gltf), settings.sampling, true, progress, file));
-  EncodeReport local;
-  tinygltf::Model encoded;
-  SEGMORPH_RETURN_IF_ERROR(encode_sampled(file, settings, encoded, report ? *report : local, progress));
-  output.data().gltf = std::move(encoded);
-  return Status::Ok();
+  return guarded([&]() -> Status {
+    SampledFile file;
+    tinygltf::Model gltf = std::move(input.data().gltf);
+    input = Model();
+    SEGMORPH_RETURN_IF_ERROR(analyze_model(std::move(gltf), settings.sampling, true, progress, file));
+    EncodeReport local;
+    tinygltf::Model encoded;
+    SEGMORPH_RETURN_IF_ERROR(encode_sampled(file, settings, encoded, report ? *report : local, progress));
+    output.data().gltf = std::move(encoded);
+    return Status::Ok();
+  });
 }
 
 Status decode(Model& model, DecodeReport* report, std::vector<DecodedFrames>* frames) {
-  DecodedSizes sizes;
-  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(model.data().gltf, &sizes, frames));
-  if (sizes.primitives > 0 || sizes.coded_animations > 0) name_generator(model.data().gltf);
-  if (report) *report = {sizes.animation_bytes, sizes.primitives, sizes.coded_animations};
-  return Status::Ok();
+  return guarded([&]() -> Status {
+    DecodedSizes sizes;
+    SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(model.data().gltf, &sizes, frames));
+    if (sizes.primitives > 0 || sizes.coded_animations > 0) name_generator(model.data().gltf);
+    if (report) *report = {sizes.animation_bytes, sizes.primitives, sizes.coded_animations};
+    return Status::Ok();
+  });
 }
 
 Status save_decoded_frames(const std::vector<DecodedFrames>& frames, const std::string& path) {
-  static_assert(sizeof(float) == 4, "binary32 floats");
-  const uint16_t probe = 1;
-  uint8_t first;
-  std::memcpy(&first, &probe, 1);
-  if (first != 1) return Status(StatusCode::unsupported, "raw frames are little-endian floats: this is a big-endian machine");
-  size_t floats = 0;
-  for (const DecodedFrames& primitive : frames)
-    for (const DecodedFrames::Clip& clip : primitive.clips) floats += clip.positions.size();
-  std::vector<float> all;
-  all.reserve(floats);
-  for (const DecodedFrames& primitive : frames)
-    for (const DecodedFrames::Clip& clip : primitive.clips)
-      all.insert(all.end(), clip.positions.begin(), clip.positions.end());
-  return save_file(path, all.data(), all.size() * sizeof(float));
+  return guarded([&]() -> Status {
+    static_assert(sizeof(float) == 4, "binary32 floats");
+    const uint16_t probe = 1;
+    uint8_t first;
+    std::memcpy(&first, &probe, 1);
+    if (first != 1) return Status(StatusCode::unsupported, "raw frames are little-endian floats: this is a big-endian machine");
+    size_t floats = 0;
+    for (const DecodedFrames& primitive : frames)
+      for (const DecodedFrames::Clip& clip : primitive.clips) floats += clip.positions.size();
+    std::vector<float> all;
+    all.reserve(floats);
+    for (const DecodedFrames& primitive : frames)
+      for (const DecodedFrames::Clip& clip : primitive.clips)
+        all.insert(all.end(), clip.positions.begin(), clip.positions.end());
+    return save_file(path, all.data(), all.size() * sizeof(float));
+  });
 }
 
 Status verify(const Model& original, const Model& compressed, const SampleSettings& settings, VerifyReport& report,
               const Progress& progress) {
-  SampledFile reference, other;
-  SEGMORPH_RETURN_IF_ERROR(analyze_model(original.data().gltf, settings, true, progress, reference));
-  SEGMORPH_RETURN_IF_ERROR(analyze_model(compressed.data().gltf, settings, false, progress, other));
-  report_progress(progress, "comparing at the frame times of the original");
-  AnimationComparison comparison;
-  SEGMORPH_RETURN_IF_ERROR(compare_animation(reference.model, reference.scene, reference.sampled, other.model,
-                                             other.scene, comparison, false, nullptr, 0));  // every core
-  report = VerifyReport();
-  report.vertices = comparison.vertices;
-  report.frames = comparison.frames;
-  report.vertex_frames = comparison.vertex_frames;
-  report.kg_percent = comparison.worst.kg_percent;
-  report.rmse_over_diagonal = comparison.worst.rmse_over_diagonal;
-  report.max_error_over_diagonal = comparison.worst.max_error_over_diagonal;
-  report.animation_bytes = other.decoded.animation_bytes;
-  for (const PrimitiveComparison& compared : comparison.primitives)
-    report.primitives.push_back(primitive_error(reference.model, compared));
-  return Status::Ok();
+  return guarded([&]() -> Status {
+    SampledFile reference, other;
+    SEGMORPH_RETURN_IF_ERROR(analyze_model(original.data().gltf, settings, true, progress, reference));
+    SEGMORPH_RETURN_IF_ERROR(analyze_model(compressed.data().gltf, settings, false, progress, other));
+    report_progress(progress, "comparing at the frame times of the original");
+    AnimationComparison comparison;
+    SEGMORPH_RETURN_IF_ERROR(compare_animation(reference.model, reference.scene, reference.sampled, other.model,
+                                               other.scene, comparison, false, nullptr, 0));  // every core
+    report = VerifyReport();
+    report.vertices = comparison.vertices;
+    report.frames = comparison.frames;
+    report.vertex_frames = comparison.vertex_frames;
+    report.kg_percent = comparison.worst.kg_percent;
+    report.rmse_over_diagonal = comparison.worst.rmse_over_diagonal;
+    report.max_error_over_diagonal = comparison.worst.max_error_over_diagonal;
+    report.animation_bytes = other.decoded.animation_bytes;
+    for (const PrimitiveComparison& compared : comparison.primitives)
+      report.primitives.push_back(primitive_error(reference.model, compared));
+    return Status::Ok();
+  });
 }
 
 }  // namespace segmorph

@@ -4,6 +4,10 @@
 
 #include <tiny_gltf.h>
 
+#include <exception>
+#include <new>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "comparison.h"
@@ -13,6 +17,22 @@
 #include "segmorph/status.h"
 
 namespace segmorph {
+
+// Runs `body` (returning a Status) with exceptions turned into a Status, as the pipeline API promises (errors "never
+// as an exception"): a failed allocation (std::bad_alloc, or std::length_error for a size no container can hold) is
+// out_of_memory, anything else internal. Every function of segmorph.h runs its work through it.
+template <typename Body>
+Status guarded(Body&& body) {
+  try {
+    return body();
+  } catch (const std::bad_alloc&) {
+    return Status(StatusCode::out_of_memory, "out of memory");
+  } catch (const std::length_error&) {
+    return Status(StatusCode::out_of_memory, "out of memory: an allocation larger than any container holds");
+  } catch (const std::exception& error) {
+    return Status(StatusCode::internal, std::string("internal error: ") + error.what());
+  }
+}
 
 struct Model::Data {
   tinygltf::Model gltf;

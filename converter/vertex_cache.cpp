@@ -10,6 +10,7 @@
 
 #include "accessor.h"
 #include "bake.h"
+#include "file_names.h"
 #include "gltf_io.h"
 #include "obj_reader.h"
 #include "pipeline.h"
@@ -29,13 +30,6 @@ std::string stem_of(const std::string& path) {
   if (stem.empty()) stem = fs::path(path).parent_path().filename().string();  // "frames/"
   const size_t dot = stem.find_last_of('.');
   return dot == std::string::npos || dot == 0 ? stem : stem.substr(0, dot);
-}
-
-bool ends_with_obj(const std::string& name) {
-  if (name.size() < 4) return false;
-  std::string tail = name.substr(name.size() - 4);
-  for (char& c : tail) c = char(std::tolower((unsigned char)c));
-  return tail == ".obj";
 }
 
 // --- OBJ sequences: which files, in which order ---
@@ -107,7 +101,7 @@ Status list_sequence(const std::string& source, std::vector<SequenceFile>& files
     if (error) return Status(StatusCode::io_error, "cannot list " + directory.string() + ": " + error.message());
     const std::string name = it->path().filename().string();
     if (folder) {
-      if (!ends_with_obj(name) || !it->is_regular_file(error)) continue;
+      if (!has_suffix(name, ".obj") || !it->is_regular_file(error)) continue;
       const long number = frame_number(name.substr(0, name.size() - 4));
       if (number < 0) return bad(it->path().string() + " has no frame number in its name");
       files.push_back({number, it->path().string()});
@@ -369,84 +363,86 @@ Status bake_base(const std::string& clip_name, tinygltf::Model& model, CacheMesh
 }  // namespace
 
 Status Model::load_cache(const CacheSource& source, Model& model, CacheReport* report, const Progress& progress) {
-  model = Model();
-  tinygltf::Model& gltf = model.data().gltf;
-  CacheReport local;
-  CacheReport& out = report ? *report : local;
-  out = CacheReport();
-  if (!(source.fps > 0) || !std::isfinite(source.fps))
-    return Status(StatusCode::invalid_argument, "a cache's frame rate must be positive");
-  CacheMesh base;
-  std::vector<float> times;
-  std::string clip_name;
-  ObjMesh obj;
-  double frames_per_second = 0;  // 0: the cache's own times (MDD)
-  if (source.cache.empty()) {
-    std::vector<SequenceFile> files;
-    SEGMORPH_RETURN_IF_ERROR(list_sequence(source.mesh, files));
-    report_progress(progress, "reading an OBJ sequence of " + std::to_string(files.size()) + " frames, " +
-                                  files.front().path + " to " + files.back().path);
-    SEGMORPH_RETURN_IF_ERROR(read_obj(files[0].path, obj));
-    clip_name = sequence_name(source.mesh);
-    add_obj_mesh(obj, clip_name, source.z_up, gltf, base);
-    frames_per_second = source.fps;
-    times = grid_times(double(files[0].number) / source.fps, files.size(), frames_per_second);
-    SEGMORPH_RETURN_IF_ERROR(check_times(times, source.mesh));
-    out.format = "OBJ sequence";
-    ObjFrames frames(files, obj);
-    SEGMORPH_RETURN_IF_ERROR(read_frames(frames, times, source.z_up, source.mesh, progress, base));
-  } else {
-    std::vector<std::string> warnings;
-    if (ends_with_obj(source.mesh)) {
-      SEGMORPH_RETURN_IF_ERROR(read_obj(source.mesh, obj));
-      add_obj_mesh(obj, stem_of(source.mesh), source.z_up, gltf, base);
-      obj = ObjMesh();
+  return guarded([&]() -> Status {
+    model = Model();
+    tinygltf::Model& gltf = model.data().gltf;
+    CacheReport local;
+    CacheReport& out = report ? *report : local;
+    out = CacheReport();
+    if (!(source.fps > 0) || !std::isfinite(source.fps))
+      return Status(StatusCode::invalid_argument, "a cache's frame rate must be positive");
+    CacheMesh base;
+    std::vector<float> times;
+    std::string clip_name;
+    ObjMesh obj;
+    double frames_per_second = 0;  // 0: the cache's own times (MDD)
+    if (source.cache.empty()) {
+      std::vector<SequenceFile> files;
+      SEGMORPH_RETURN_IF_ERROR(list_sequence(source.mesh, files));
+      report_progress(progress, "reading an OBJ sequence of " + std::to_string(files.size()) + " frames, " +
+                                    files.front().path + " to " + files.back().path);
+      SEGMORPH_RETURN_IF_ERROR(read_obj(files[0].path, obj));
+      clip_name = sequence_name(source.mesh);
+      add_obj_mesh(obj, clip_name, source.z_up, gltf, base);
+      frames_per_second = source.fps;
+      times = grid_times(double(files[0].number) / source.fps, files.size(), frames_per_second);
+      SEGMORPH_RETURN_IF_ERROR(check_times(times, source.mesh));
+      out.format = "OBJ sequence";
+      ObjFrames frames(files, obj);
+      SEGMORPH_RETURN_IF_ERROR(read_frames(frames, times, source.z_up, source.mesh, progress, base));
     } else {
-      SEGMORPH_RETURN_IF_ERROR(read_gltf_base(source.mesh, gltf, base, warnings));
+      std::vector<std::string> warnings;
+      if (has_suffix(source.mesh, ".obj")) {
+        SEGMORPH_RETURN_IF_ERROR(read_obj(source.mesh, obj));
+        add_obj_mesh(obj, stem_of(source.mesh), source.z_up, gltf, base);
+        obj = ObjMesh();
+      } else {
+        SEGMORPH_RETURN_IF_ERROR(read_gltf_base(source.mesh, gltf, base, warnings));
+      }
+      for (const std::string& warning : warnings) report_progress(progress, "warning: " + source.mesh + ": " + warning);
+      PointCacheReader reader;
+      const Status opened = reader.open(source.cache);
+      if (!opened.ok()) return Status(opened.code(), source.cache + ": " + opened.message());
+      if (reader.point_count() != base.points)
+        return bad(source.cache + " moves " + std::to_string(reader.point_count()) + " points, the base mesh " +
+                   source.mesh + " has " + std::to_string(base.points) +
+                   (has_suffix(source.mesh, ".obj") ? " (v lines)" : " (vertices)"));
+      const bool pc2 = reader.format() == PointCacheReader::Format::pc2;
+      out.format = pc2 ? "PC2" : "MDD";
+      if (pc2) {
+        frames_per_second = source.fps / double(reader.pc2_rate());
+        times = grid_times(double(reader.pc2_start()) / source.fps, reader.frame_count(), frames_per_second);
+      } else {
+        times = reader.times(source.fps);
+      }
+      SEGMORPH_RETURN_IF_ERROR(check_times(times, source.cache));
+      clip_name = stem_of(source.cache);
+      report_progress(progress, "reading " + source.cache + ": " + out.format + ", " +
+                                    std::to_string(reader.frame_count()) + " frames of " +
+                                    std::to_string(reader.point_count()) + " points");
+      PointCacheFrames frames(reader);
+      SEGMORPH_RETURN_IF_ERROR(read_frames(frames, times, source.z_up, source.cache, progress, base));
     }
-    for (const std::string& warning : warnings) report_progress(progress, "warning: " + source.mesh + ": " + warning);
-    PointCacheReader reader;
-    const Status opened = reader.open(source.cache);
-    if (!opened.ok()) return Status(opened.code(), source.cache + ": " + opened.message());
-    if (reader.point_count() != base.points)
-      return bad(source.cache + " moves " + std::to_string(reader.point_count()) + " points, the base mesh " +
-                 source.mesh + " has " + std::to_string(base.points) +
-                 (ends_with_obj(source.mesh) ? " (v lines)" : " (vertices)"));
-    const bool pc2 = reader.format() == PointCacheReader::Format::pc2;
-    out.format = pc2 ? "PC2" : "MDD";
-    if (pc2) {
-      frames_per_second = source.fps / double(reader.pc2_rate());
-      times = grid_times(double(reader.pc2_start()) / source.fps, reader.frame_count(), frames_per_second);
-    } else {
-      times = reader.times(source.fps);
+    out.points = base.points;
+    for (const SampledPrimitive& primitive : base.primitives) out.vertices += primitive.rest_positions.size() / 3;
+    out.frames = times.size();
+    out.first_time = times.front();
+    out.last_time = times.back();
+    // Above kMaxKeyRate keys per second, sampling at the keys needs a grid: the cache's rate (MDD's mean rate).
+    const double rate = frames_per_second > 0 ? frames_per_second
+                        : times.size() > 1    ? double(times.size() - 1) / (double(times.back()) - times.front())
+                                              : 0;
+    out.sampling.fps =
+        double(times.size() - 1) <= SampleSettings::kMaxKeyRate * (double(times.back()) - times.front()) + 1e-9 ? 0
+                                                                                                                : rate;
+    if (gltf.asset.version.empty()) gltf.asset.version = "2.0";
+    if (gltf.scenes.empty()) {
+      gltf.scenes.emplace_back();
+      gltf.scenes[0].nodes = {0};
+      gltf.defaultScene = 0;
     }
-    SEGMORPH_RETURN_IF_ERROR(check_times(times, source.cache));
-    clip_name = stem_of(source.cache);
-    report_progress(progress, "reading " + source.cache + ": " + out.format + ", " +
-                                  std::to_string(reader.frame_count()) + " frames of " +
-                                  std::to_string(reader.point_count()) + " points");
-    PointCacheFrames frames(reader);
-    SEGMORPH_RETURN_IF_ERROR(read_frames(frames, times, source.z_up, source.cache, progress, base));
-  }
-  out.points = base.points;
-  for (const SampledPrimitive& primitive : base.primitives) out.vertices += primitive.rest_positions.size() / 3;
-  out.frames = times.size();
-  out.first_time = times.front();
-  out.last_time = times.back();
-  // Above kMaxKeyRate keys per second, sampling at the keys needs a grid: the cache's rate (MDD's mean rate).
-  const double rate = frames_per_second > 0 ? frames_per_second
-                      : times.size() > 1    ? double(times.size() - 1) / (double(times.back()) - times.front())
-                                            : 0;
-  out.sampling.fps =
-      double(times.size() - 1) <= SampleSettings::kMaxKeyRate * (double(times.back()) - times.front()) + 1e-9 ? 0
-                                                                                                              : rate;
-  if (gltf.asset.version.empty()) gltf.asset.version = "2.0";
-  if (gltf.scenes.empty()) {
-    gltf.scenes.emplace_back();
-    gltf.scenes[0].nodes = {0};
-    gltf.defaultScene = 0;
-  }
-  return bake_base(clip_name, gltf, base);
+    return bake_base(clip_name, gltf, base);
+  });
 }
 
 }  // namespace segmorph

@@ -3,9 +3,12 @@
 // engine's importer, a DCC exporter, a build tool. Link segmorph::segmorph (find_package(segmorph CONFIG)); tinygltf,
 // Draco, Eigen and Spectra are inside, none of them in this header. docs/library.md has a worked example.
 //
-// Errors come back as a Status (include/segmorph/status.h), never as an exception or a print; progress on long work,
-// when the caller asks for it, as calls of a function it gives. Units: KG error in percent, rates in bits per vertex
-// per frame of the whole file, times in seconds, sizes in bytes.
+// Errors come back as a Status (include/segmorph/status.h), never as an exception or a print (a failed allocation is
+// OUT_OF_MEMORY; tests/out_of_memory_test.cpp fails allocations throughout info, bake, encode, decode and verify; an
+// allocation that fails inside tinygltf's JSON parser, in Model::load, may end the process: tinygltf 2.7 lets it
+// reach a noexcept function there). Progress on long work, when the caller asks for it, as calls of a function it
+// gives. Units: KG error in percent, rates in bits per vertex per frame of the whole file, times in seconds, sizes in
+// bytes.
 #pragma once
 
 #include <cstddef>
