@@ -1434,7 +1434,9 @@ TEST(Cli, SignalsStopABatchCleanly) {
       if (waiting) arguments.insert(arguments.begin() + 3, waiting_input(directory));
       const int status = signal_on_line(arguments, stage, SIGTERM);
       ASSERT_GE(status, 0);
-      if (waiting) EXPECT_TRUE(WIFSIGNALED(status)) << "a batch waiting for an input was not interrupted";
+      if (waiting) {
+        EXPECT_TRUE(WIFSIGNALED(status)) << "a batch waiting for an input was not interrupted";
+      }
       EXPECT_EQ(processes_with_argument(outputs), 0) << "a process of the batch outlived it";
       if (fs::exists(outputs))
         for (const auto& entry : fs::directory_iterator(outputs)) {
