@@ -1,5 +1,5 @@
 // Golden files: small encoded files of each bitstream version the decoder reads (tests/golden/vN/, N from
-// format::kVersion to format::kNewestVersion) decode to the frames recorded beside them, so that any change to the
+// format::kOldestVersion to format::kNewestVersion) decode to the frames recorded beside them, so that any change to the
 // format, a model or the reconstruction arithmetic is deliberate: it needs a new version (spec/README.md, "Version
 // compatibility") and new golden files, and the old ones either still decode or are retired with the version.
 //
@@ -76,11 +76,11 @@ std::string read_file(const std::string& path) {
   return text.str();
 }
 
-// Every version the decoder reads (format::kVersion to format::kNewestVersion) has its folder of golden files.
+// Every version the decoder reads (format::kOldestVersion to format::kNewestVersion) has its folder of golden files.
 TEST(Golden, EveryVersionsFilesDecodeToTheirFrames) {
-  static_assert(format::kVersion <= format::kNewestVersion);
+  static_assert(format::kOldestVersion <= format::kNewestVersion);
   const bool update = std::getenv("SEGMORPH_UPDATE_GOLDEN") != nullptr;
-  for (int version = format::kVersion; version <= format::kNewestVersion; ++version) {
+  for (int version = format::kOldestVersion; version <= format::kNewestVersion; ++version) {
     const std::string directory = std::string(SEGMORPH_GOLDEN_DIR) + "/v" + std::to_string(version);
     const std::vector<std::string> files = testing::gltf_files_under(directory);
     EXPECT_FALSE(files.empty()) << "no golden files for bitstream version " << version << " in " << directory
@@ -101,7 +101,7 @@ TEST(Golden, EveryVersionsFilesDecodeToTheirFrames) {
 // Each version's folder holds streams of that version: a file of vN/ has a stream whose version byte is N (the
 // magic "SGMA", then the version), and none of another version.
 TEST(Golden, EveryVersionsFilesHoldStreamsOfThatVersion) {
-  for (int version = format::kVersion; version <= format::kNewestVersion; ++version) {
+  for (int version = format::kOldestVersion; version <= format::kNewestVersion; ++version) {
     const std::string directory = std::string(SEGMORPH_GOLDEN_DIR) + "/v" + std::to_string(version);
     for (const std::string& file : testing::gltf_files_under(directory)) {
       const std::string bytes = read_file(file);

@@ -234,7 +234,7 @@ TEST(TableResiduals, VersionTwoAndTheFlagOnlyWithTheSetting) {
   defaults.frame_references = defaults.motion_contexts = defaults.weight_contexts = false;
   defaults.transform_residuals = false;
   EXPECT_EQ(plain.stream, encode(clips, base, defaults).stream);
-  EXPECT_EQ(plain.stream[4], format::kVersion);
+  EXPECT_EQ(plain.stream[4], format::kAdaptiveVersion);
   EXPECT_FALSE(plain.stream[5] & format::kFlagTableResiduals);
   EXPECT_EQ(fast.stream[4], format::kTableVersion);
   EXPECT_TRUE(fast.stream[5] & format::kFlagTableResiduals);
@@ -259,7 +259,7 @@ TEST(TableResiduals, LosslessIgnoresTheSetting) {
   lossless.frame_references = lossless.motion_contexts = lossless.weight_contexts = false;
   const Encoded encoded = encode(clips, base, table(lossless));
   EXPECT_EQ(encoded.stream, encode(clips, base, lossless).stream);
-  EXPECT_EQ(encoded.stream[4], format::kVersion);
+  EXPECT_EQ(encoded.stream[4], format::kAdaptiveVersion);
   EXPECT_FALSE(encoded.stream[5] & format::kFlagTableResiduals);
   EXPECT_TRUE(encoded.stream[5] & format::kFlagLossless);
   std::vector<FrameSequence> decoded;
@@ -425,7 +425,7 @@ void expect_refused(const TableStream& s, const std::vector<uint8_t>& stream, co
 TEST(TableResidualsHostile, TableFlagOutsideVersionTwoOrInALosslessStreamIsRefused) {
   const TableStream s = table_stream(6);
   std::vector<uint8_t> version_one = s.stream;
-  version_one[4] = format::kVersion;
+  version_one[4] = format::kAdaptiveVersion;
   expect_refused(s, version_one, "unknown flags", "version 1 with the table flag");
   std::vector<uint8_t> lossless = s.stream;
   lossless[5] |= format::kFlagLossless;
@@ -440,7 +440,7 @@ TEST(TableResidualsHostile, TableFlagOutsideVersionTwoOrInALosslessStreamIsRefus
   CodecSettings plain = error(0.15);
   plain.frame_references = plain.motion_contexts = plain.weight_contexts = false;
   const Encoded adaptive = encode(s.clips, s.base, plain);
-  ASSERT_EQ(adaptive.stream[4], format::kVersion);
+  ASSERT_EQ(adaptive.stream[4], format::kAdaptiveVersion);
   std::vector<uint8_t> three = adaptive.stream;
   three[4] = format::kReferenceVersion;
   ASSERT_TRUE(decode_animation(three.data(), three.size(), s.base, s.clips[0].triangles, decoded).ok());

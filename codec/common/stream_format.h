@@ -19,10 +19,11 @@ constexpr uint8_t kMagic[4] = {'S', 'G', 'M', 'A'};
 // symbols: the flags are version 3's, less the four of the residual loop (LOSSLESS, TEMPORAL, SPATIAL, TABLE), which
 // must be clear; REFERENCES no longer needs TEMPORAL (the motion still uses the references). The encoder writes it
 // where it measures a smaller stream than the residual loop's at no more error.
-constexpr uint8_t kVersion = 1;
+constexpr uint8_t kAdaptiveVersion = 1;  // the adaptive residual code, the first version
 constexpr uint8_t kTableVersion = 2;
 constexpr uint8_t kReferenceVersion = 3;  // frame references and linear motion
 constexpr uint8_t kTransformVersion = 4;  // the residuals as temporal bases and coefficients
+constexpr uint8_t kOldestVersion = kAdaptiveVersion;  // the versions a decoder reads: kOldestVersion to kNewestVersion
 constexpr uint8_t kNewestVersion = kTransformVersion;
 constexpr size_t kHeaderBytes = 10;  // magic, version, flags, body length (u32, little endian); the body follows
 

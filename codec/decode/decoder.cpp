@@ -66,8 +66,8 @@ void FrameLoop::start_clip() {
   if (reconstructor_) reconstructor_->start_clip();
 }
 
-Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two) {
-  const size_t count = two ? 2 : 1;
+Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, size_t count) {
+  assert(count == 1 || count == 2);
   if (transform_) {  // version 4: x = float(p + r), r the frame's residual from the coefficients
     for (size_t s = 0; s < count; ++s) {
       const double* p = &predictions_[s * row_];
@@ -91,7 +91,7 @@ Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two
     float* to = &welded_frames_[s * row_];
     return [to](size_t i, float x) { to[i] = x; };
   };
-  if (two)
+  if (count == 2)
     reconstructor_->two_frames(frame, &predictions_[0], symbol(0), output(0), &predictions_[row_], symbol(1),
                                output(1));
   else
@@ -104,16 +104,16 @@ Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, bool two
 bool FrameLoop::finite(size_t slot) const { return all_finite(&welded_frames_[slot * row_], row_); }
 
 Status FrameLoop::decode(size_t frame, const Residuals& residuals, float* first, float* second) {
-  SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, second != nullptr));
+  SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, second ? 2 : 1));
   to_vertices_.gather(&welded_frames_[0], first);
   if (second) to_vertices_.gather(&welded_frames_[row_], second);
   return Status::Ok();
 }
 
-Status FrameLoop::decode_append(size_t frame, const Residuals& residuals, bool two, std::vector<float>& out) {
-  SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, two));
+Status FrameLoop::decode_append(size_t frame, const Residuals& residuals, size_t count, std::vector<float>& out) {
+  SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, count));
   to_vertices_.append(&welded_frames_[0], out);
-  if (two) to_vertices_.append(&welded_frames_[row_], out);
+  if (count == 2) to_vertices_.append(&welded_frames_[row_], out);
   return Status::Ok();
 }
 
@@ -175,12 +175,12 @@ void FrameDecoder::take_checkpoint() {
   checkpoints_[clip_] = std::move(checkpoint);
 }
 
-Status FrameDecoder::before_decode(bool two) {
+Status FrameDecoder::before_decode(size_t count) {
   assert(is_open());
   if (!failure_.ok()) return failure_;
   const size_t left = frames_left_in_clip();
   if (left == 0) return Status(StatusCode::invalid_argument, "the stream has no frame left to decode");
-  if (two && left < 2) return Status(StatusCode::invalid_argument, "two frames asked for where the clip has one left");
+  if (count > left) return Status(StatusCode::invalid_argument, "two frames asked for where the clip has one left");
   return Status::Ok();
 }
 
@@ -206,13 +206,13 @@ Status FrameDecoder::after_decode(Status status, size_t count) {
 }
 
 Status FrameDecoder::decode(float* first, float* second) {
-  SEGMORPH_RETURN_IF_ERROR(before_decode(second != nullptr));
+  SEGMORPH_RETURN_IF_ERROR(before_decode(second ? 2 : 1));
   return after_decode(loop_->decode(frame_, residuals_, first, second), second ? 2 : 1);
 }
 
-Status FrameDecoder::decode_append(bool two, std::vector<float>& out) {
-  SEGMORPH_RETURN_IF_ERROR(before_decode(two));
-  return after_decode(loop_->decode_append(frame_, residuals_, two, out), two ? 2 : 1);
+Status FrameDecoder::decode_append(size_t count, std::vector<float>& out) {
+  SEGMORPH_RETURN_IF_ERROR(before_decode(count));
+  return after_decode(loop_->decode_append(frame_, residuals_, count, out), count);
 }
 
 Status FrameDecoder::skip_frame() {
@@ -250,7 +250,7 @@ Status FrameDecoder::seek(size_t clip) {
 namespace {
 
 // `clips` filled with the clips of `content`: at each clip's start begin_clip(clip, frame) returns how many floats to
-// reserve, then its frames are appended two at a time (one at a clip's odd end) by append(frame, two, positions);
+// reserve, then its frames are appended two at a time (one at a clip's odd end) by append(frame, count, positions);
 // frame counts the stream's frames.
 template <typename BeginClip, typename Append>
 Status collect_clips(const StreamContent& content, BeginClip begin_clip, Append append,
@@ -263,9 +263,9 @@ Status collect_clips(const StreamContent& content, BeginClip begin_clip, Append 
     clip.frame_count = content.clip_frames[c];
     clip.positions.reserve(begin_clip(c, frame));
     for (size_t f = 0; f < clip.frame_count;) {
-      const bool two = clip.frame_count - f >= 2;
-      SEGMORPH_RETURN_IF_ERROR(append(frame, two, clip.positions));
-      f += two ? 2 : 1, frame += two ? 2 : 1;
+      const size_t count = std::min<size_t>(clip.frame_count - f, 2);
+      SEGMORPH_RETURN_IF_ERROR(append(frame, count, clip.positions));
+      f += count, frame += count;
     }
   }
   return Status::Ok();
@@ -288,8 +288,8 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
     loop.start_clip();
     return size_t(content.clip_frames[c]) * content.vertex_count * 3;  // the residuals are in memory: so can they be
   };
-  auto append = [&](size_t frame, bool two, std::vector<float>& positions) {
-    return loop.decode_append(frame, copy, two, positions);
+  auto append = [&](size_t frame, size_t count, std::vector<float>& positions) {
+    return loop.decode_append(frame, copy, count, positions);
   };
   return collect_clips(content, begin_clip, append, clips);
 }
@@ -309,7 +309,9 @@ Status decode_animation(const uint8_t* data, size_t size, const std::vector<floa
     return frames_to_reserve(content.clip_frames[c], bound - std::min(frame, bound), frame_floats * sizeof(float)) *
            frame_floats;
   };
-  auto append = [&](size_t, bool two, std::vector<float>& positions) { return decoder.decode_append(two, positions); };
+  auto append = [&](size_t, size_t count, std::vector<float>& positions) {
+    return decoder.decode_append(count, positions);
+  };
   return collect_clips(content, begin_clip, append, clips);
 }
 

@@ -48,11 +48,12 @@ class FrameLoop {
   // same clip) into second. Fails on bad symbols and on a position that decodes to NaN or infinity.
   Status decode(size_t frame, const Residuals& residuals, float* first, float* second);
 
-  // The same, appending the frames' V × 3 floats to `out` (which grows without being zero-filled first).
-  Status decode_append(size_t frame, const Residuals& residuals, bool two, std::vector<float>& out);
+  // The same for `count` frames (1 or 2), appending their V × 3 floats to `out` (which grows without being
+  // zero-filled first).
+  Status decode_append(size_t frame, const Residuals& residuals, size_t count, std::vector<float>& out);
 
  private:
-  Status reconstruct(size_t frame, const Residuals& residuals, bool two);
+  Status reconstruct(size_t frame, const Residuals& residuals, size_t count);  // 1 or 2 frames
   bool finite(size_t slot) const;
 
   const StreamContent& content_;
@@ -103,8 +104,8 @@ class FrameDecoder {
   // Decodes the next frame into first (V × 3) and, when second is not null, the one after it, which must be in the
   // same clip; advances. The last frame of the stream also checks that the stream ends there.
   Status decode(float* first, float* second);
-  // The same, appending to `out`.
-  Status decode_append(bool two, std::vector<float>& out);
+  // The same for `count` frames (1, or 2 within the clip), appending to `out`.
+  Status decode_append(size_t count, std::vector<float>& out);
 
   // Positions the decoder at the first frame of `clip` (< the clip count). Versions 1 to 3: a clip start the decoder
   // has passed is restored from a checkpoint (about 3 bytes per welded vertex, kept while they take at most 64 MiB
@@ -116,7 +117,7 @@ class FrameDecoder {
   size_t frame_bound() const { return frame_bound_; }
 
  private:
-  Status before_decode(bool two);
+  Status before_decode(size_t count);
   Status after_decode(Status status, size_t count);
   void take_checkpoint();
   Status skip_frame();

@@ -49,13 +49,13 @@ Status StreamReader::read_head(const std::vector<float>& base, StreamContent& co
   if (size < format::kHeaderBytes || std::memcmp(data, format::kMagic, 4) != 0)
     return Status(StatusCode::bad_data, "not a segmorph animation stream (bad magic)");
   const uint8_t version = data[4];
-  if (version < format::kVersion || version > format::kNewestVersion)
+  if (version < format::kOldestVersion || version > format::kNewestVersion)
     return Status(StatusCode::unsupported, "animation stream version " + std::to_string(version) +
-                                               " (this decoder reads versions " + std::to_string(format::kVersion) +
+                                               " (this decoder reads versions " + std::to_string(format::kOldestVersion) +
                                                " to " + std::to_string(format::kNewestVersion) + ")");
   content.flags = data[5];
   content.transform = version == format::kTransformVersion;
-  const uint8_t known = version == format::kVersion            ? format::kKnownFlags
+  const uint8_t known = version == format::kAdaptiveVersion    ? format::kKnownFlags
                         : version == format::kTableVersion     ? format::kKnownTableVersionFlags
                         : version == format::kReferenceVersion ? format::kKnownReferenceVersionFlags
                                                                : format::kKnownTransformVersionFlags;

@@ -49,7 +49,7 @@ Status write_stream_until_invalid(const StreamContent& content, const std::vecto
   out.push_back(content.transform ? format::kTransformVersion
                 : version_3       ? format::kReferenceVersion
                 : table           ? format::kTableVersion
-                                  : format::kVersion);
+                                  : format::kAdaptiveVersion);
   out.push_back(content.flags);
   const size_t length_at = out.size();
   out.insert(out.end(), 4, 0);  // body length, filled in at the end

@@ -13,7 +13,7 @@
 // --basis-bits 0 (the default) each basis vector's entries get a step of their own, from lambda and the energy of
 // the coefficients that use the vector. A welded vertex's error counts once per vertex of its group (as if they moved
 // together; the sequences measured have one group of two vertices at most).
-//   transform_coding FILE [--error E] [--basis-bits B]
+//   transform_prototype FILE [--error E] [--basis-bits B]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -167,7 +167,7 @@ Choice choose(const std::vector<std::vector<Option>>& options, double budget, co
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: transform_coding FILE [--error E] [--basis-bits B]\n");
+    std::fprintf(stderr, "usage: transform_prototype FILE [--error E] [--basis-bits B]\n");
     return 2;
   }
   CodecSettings settings;
