@@ -75,10 +75,12 @@ tinygltf::Primitive bake_primitive(const tinygltf::Primitive& original, const Sa
       throw std::bad_alloc();
   };
   if (has_normals || !sampled.rest_tangents.empty()) {
-    if (!decoder || !sampled.rest_tangents.empty()) topology = weld_topology(sampled.clips);
-    const std::vector<double> rest_geometric =
-        decoder && sampled.rest_tangents.empty() ? std::vector<double>()
-                                                 : welded_vertex_normals(sampled.rest_positions.data(), topology);
+    // The primitive's own welding and rest surface: a sampled primitive's normals turn on them, and any tangents.
+    std::vector<double> rest_geometric;
+    if (!decoder || !sampled.rest_tangents.empty()) {
+      topology = weld_topology(sampled.clips);
+      rest_geometric = welded_vertex_normals(sampled.rest_positions.data(), topology);
+    }
     if (has_normals) {
       base_normals.resize(vertex_count * 3);
       if (decoder) {

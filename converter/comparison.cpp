@@ -10,6 +10,7 @@
 #include "accessor.h"
 #include "bake.h"
 #include "correspondence.h"
+#include "encode/metrics.h"
 #include "encode/parallel.h"
 
 namespace segmorph {
@@ -137,20 +138,14 @@ double trajectory_gap(const std::vector<FrameSequence>& reference, const std::ve
 // The root mean square distance of a primitive's positions from their frame's centroid, over the frames `frames`
 // names (per clip): the size of its shape, the KG error's scale.
 double shape_radius(const std::vector<FrameSequence>& clips, const std::vector<std::vector<size_t>>& frames) {
-  double sum = 0;
+  double spread = 0;
   size_t count = 0;
   for (size_t c = 0; c < frames.size(); ++c)
     for (size_t f : frames[c]) {
-      const float* x = clips[c].frame(f);
-      const size_t vertices = clips[c].vertex_count;
-      double centroid[3] = {0, 0, 0};
-      for (size_t v = 0; v < vertices; ++v)
-        for (int k = 0; k < 3; ++k) centroid[k] += x[v * 3 + size_t(k)] / double(vertices);
-      for (size_t v = 0; v < vertices; ++v)
-        for (int k = 0; k < 3; ++k) sum += (x[v * 3 + size_t(k)] - centroid[k]) * (x[v * 3 + size_t(k)] - centroid[k]);
-      count += vertices;
+      add_frame_spread(clips[c].frame(f), clips[c].vertex_count, spread);
+      count += clips[c].vertex_count;
     }
-  return count > 0 ? std::sqrt(sum / double(count)) : 0.0;
+  return count > 0 ? std::sqrt(spread / double(count)) : 0.0;
 }
 
 // Each primitive of `want`'s counterpart (node, primitive) in the other file: the nearest over every node with a

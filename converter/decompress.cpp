@@ -76,8 +76,8 @@ DecodedFrames decoded_frames(int mesh, int primitive, bool targets, const std::v
 }
 
 // Decodes the stream of a primitive that keeps its morph targets and fills the targets in: POSITION with the
-// decoded displacements, NORMAL (where the target has it) turned by the decoder (AnimationDecoder::turn_normals). `bytes`: the
-// stream's length.
+// decoded displacements, NORMAL (where the target has it) turned by the decoder (AnimationDecoder::turn_normals).
+// `bytes`: the stream's length.
 Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
                        const std::string& what, size_t& bytes, std::vector<FrameSequence>* frames) {
   SampledPrimitive rest;

@@ -2,7 +2,6 @@
 // and verify over the converter's stages.
 #include "pipeline.h"
 
-#include <cctype>
 #include <cstdio>
 #include <cstring>
 
@@ -11,6 +10,7 @@
 #include "comparison.h"
 #include "compressed.h"
 #include "encode.h"
+#include "file_names.h"
 #include "gltf_io.h"
 #include "output_file.h"
 
@@ -73,10 +73,8 @@ size_t file_bytes(const std::string& path, const Model& model) {
 
 bool writes_over(const std::string& output, const std::string& input_path, const Model& input) {
   std::vector<std::string> written = {output};
-  const size_t dot = output.find_last_of('.');
-  std::string extension = dot == std::string::npos ? "" : output.substr(dot);
-  for (char& c : extension) c = char(std::tolower((unsigned char)c));
-  if (extension == ".gltf") written.push_back(output.substr(0, dot) + ".bin");  // save() writes it beside
+  if (has_suffix(output, ".gltf"))
+    written.push_back(output.substr(0, output.size() - 5) + ".bin");  // save() writes it beside
   for (const std::string& file : files_of(input_path, input))
     for (const std::string& out : written)
       if (same_file(file, out)) return true;

@@ -20,7 +20,8 @@
 
 namespace segmorph {
 
-static_assert(SEGMORPH_STREAM_VERSION_MIN == format::kOldestVersion && SEGMORPH_STREAM_VERSION_MAX == format::kNewestVersion,
+static_assert(SEGMORPH_STREAM_VERSION_MIN == format::kOldestVersion &&
+                  SEGMORPH_STREAM_VERSION_MAX == format::kNewestVersion,
               "include/segmorph/version.h names the stream versions codec/common/stream_format.h defines");
 static_assert(SEGMORPH_TRACK_STREAM_VERSION == track_format::kVersion,
               "include/segmorph/version.h names the track stream version codec/common/track_format.h defines");
