@@ -24,9 +24,9 @@
 #include "encode/segmentation/diffusion.h"
 #include "encode/segmentation/segmentation.h"
 #include "encode/stream_writer.h"
-#include "gltf_io.h"
-#include "sample.h"
+#include "gltf/gltf_io.h"
 #include "sample_first_animated.h"
+#include "sampling/sample.h"
 #include "segmorph/decoder_c.h"
 #include "stand_in_base.h"
 

@@ -17,9 +17,9 @@
 #include "decode/frame_decoder.h"
 #include "encode/encoder.h"
 #include "encode/metrics.h"
-#include "gltf_io.h"
-#include "sample.h"
+#include "gltf/gltf_io.h"
 #include "sample_first_animated.h"
+#include "sampling/sample.h"
 #include "stand_in_base.h"
 
 using namespace segmorph;

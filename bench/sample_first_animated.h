@@ -1,8 +1,8 @@
 // What the codec-level bench tools encode: the first animated node of a glTF file (needs segmorph_gltf).
 #pragma once
 
-#include "gltf_io.h"
-#include "sample.h"
+#include "gltf/gltf_io.h"
+#include "sampling/sample.h"
 
 namespace segmorph::bench {
 

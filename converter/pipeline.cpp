@@ -5,14 +5,14 @@
 #include <cstdio>
 #include <cstring>
 
-#include "bake.h"
+#include "bake/bake.h"
 #include "common/topology.h"
-#include "comparison.h"
-#include "compressed.h"
-#include "encode.h"
+#include "decoding/decode_file.h"
+#include "encoding/encode_file.h"
 #include "file_names.h"
-#include "gltf_io.h"
-#include "output_file.h"
+#include "gltf/gltf_io.h"
+#include "gltf/output_file.h"
+#include "verify/comparison.h"
 
 namespace segmorph {
 

@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "comparison.h"
-#include "compressed.h"
-#include "sample.h"
+#include "decoding/decode_file.h"
+#include "sampling/sample.h"
 #include "segmorph/segmorph.h"
 #include "segmorph/status.h"
+#include "verify/comparison.h"
 
 namespace segmorph {
 

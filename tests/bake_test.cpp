@@ -1,4 +1,4 @@
-#include "bake.h"
+#include "bake/bake.h"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <memory>
 
 #include "accessor.h"
-#include "gltf_io.h"
-#include "sample.h"
+#include "gltf/gltf_io.h"
+#include "sampling/sample.h"
 #include "test_files.h"
 
 namespace segmorph {

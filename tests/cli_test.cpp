@@ -14,7 +14,7 @@
 #include <sstream>
 
 #include "accessor.h"
-#include "gltf_io.h"
+#include "gltf/gltf_io.h"
 #include "test_files.h"
 
 namespace {

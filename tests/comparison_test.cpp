@@ -2,12 +2,12 @@
 // (compare_animation), on the kind of file gltfpack writes: nodes reordered and re-parented, positions
 // quantized to integers with the dequantization on the node (KHR_mesh_quantization), vertices reordered
 // and merged, tracks that move nothing dropped.
-#include "comparison.h"
+#include "verify/comparison.h"
 
 #include <random>
 
-#include "correspondence.h"
 #include "sampling_fixtures.h"
+#include "verify/correspondence.h"
 
 namespace segmorph {
 namespace {

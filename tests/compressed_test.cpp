@@ -1,6 +1,7 @@
 // The extension's JSON side in memory: what compress_model writes around the streams (placeholder channels) and
 // the validity rules decode_compressed_model checks (spec/README.md, "Validity").
-#include "compressed.h"
+#include "decoding/decode_file.h"
+#include "encoding/compress_primitives.h"
 
 #include <gtest/gtest.h>
 
@@ -10,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "bake.h"
-#include "comparison.h"
+#include "bake/bake.h"
+#include "gltf/gltf_io.h"
 #include "gltf_builder.h"
-#include "gltf_io.h"
-#include "sample.h"
+#include "sampling/sample.h"
 #include "segmorph_extension.h"
 #include "test_files.h"
+#include "verify/comparison.h"
 
 namespace segmorph {
 namespace {

@@ -10,8 +10,8 @@
 #include <set>
 
 #include "accessor.h"
-#include "gltf_io.h"
-#include "sample.h"
+#include "gltf/gltf_io.h"
+#include "sampling/sample.h"
 #include "test_files.h"
 #include "test_meshes.h"
 

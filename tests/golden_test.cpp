@@ -25,11 +25,11 @@
 #include "common/stream_format.h"
 #include "common/track_format.h"
 #include "common/track_set.h"
-#include "compressed.h"
 #include "decode/track_decoder.h"
+#include "decoding/decode_file.h"
 #include "encode/track_encoder.h"
-#include "gltf_io.h"
-#include "sample.h"
+#include "gltf/gltf_io.h"
+#include "sampling/sample.h"
 #include "test_files.h"
 
 namespace segmorph {

@@ -1,5 +1,5 @@
 // The JSON pass that lets tinygltf 2.7 load KHR_draco_mesh_compression primitives with an indices accessor
-// that has no bufferView (valid glTF; see converter/json_prepass.h).
+// that has no bufferView (valid glTF; see extensions/json_prepass.h).
 #include "json_prepass.h"
 
 #include <gtest/gtest.h>

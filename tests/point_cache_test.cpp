@@ -1,6 +1,6 @@
 // The PC2 and MDD readers against hand-made files: every header field, both byte orders, and bad files refused
 // before any allocation their header would ask for.
-#include "point_cache.h"
+#include "caches/point_cache.h"
 
 #include <gtest/gtest.h>
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "gltf_builder.h"
-#include "sample.h"
+#include "sampling/sample.h"
 
 namespace segmorph {
 

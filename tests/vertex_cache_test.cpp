@@ -8,10 +8,10 @@
 #include <fstream>
 
 #include "cache_files.h"
+#include "caches/obj_reader.h"
 #include "encode/metrics.h"
+#include "gltf/gltf_io.h"
 #include "gltf_builder.h"
-#include "gltf_io.h"
-#include "obj_reader.h"
 #include "pipeline.h"
 #include "test_files.h"
 

@@ -1,6 +1,6 @@
 // How the codec's time and memory grow with V (F fixed) and with F (V fixed): bench/codec_scaling, one process
 // per point (its peak memory is the process's), with glibc's large buffers on transparent huge pages as the
-// segmorph tool asks for itself (converter/main.cpp).
+// segmorph tool asks for itself (converter/cli/main.cpp).
 
 import { mkdirSync } from 'node:fs';
 import path from 'node:path';

@@ -5,8 +5,8 @@
 #include <cassert>
 #include <cmath>
 
+#include "common/parallel.h"
 #include "encode/metrics.h"
-#include "encode/parallel.h"
 
 namespace segmorph {
 namespace {

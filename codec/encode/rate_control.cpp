@@ -4,9 +4,9 @@
 #include <cmath>
 #include <vector>
 
+#include "common/parallel.h"
 #include "common/prediction.h"
 #include "common/stream_format.h"
-#include "encode/parallel.h"
 
 namespace segmorph {
 namespace {

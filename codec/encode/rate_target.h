@@ -2,11 +2,11 @@
 // measures it; bpvf: bits per vertex per frame of the whole file) passes down the layers of an encode; each layer
 // aims a little inside what it is given, by the factors below, so that the file as a whole meets the target:
 //
-//   whole file (converter/encode.cpp,        bpvf: a result within kBpvfTolerance of the target meets it;
-//               converter/kept_skins.cpp)    error: kept skins' tracks searched until KG <= kErrorTargetMargin × E;
+//   whole file (converter/encoding/           bpvf: a result within kBpvfTolerance of the target meets it;
+//               encode_file.cpp, kept_skins)  error: kept skins' tracks searched until KG <= kErrorTargetMargin × E;
 //                                            meshes that move rigidly: Draco takes kMovingMeshErrorShare of E
-//   primitive (converter/compressed.cpp,     error: the codec is given kErrorTargetMargin × E; kept targets search
-//              converter/kept_targets.cpp)   until the animation's KG is in [kCloseEnough, 1] × that
+//   primitive (converter/encoding/           error: the codec is given kErrorTargetMargin × E; kept targets search
+//              baked_primitives, kept_targets) until the animation's KG is in [kCloseEnough, 1] × that
 //   stream (codec/encode/rate_control_driver.cpp)   bpvf: the coded size lands in [kBpvfLandingLow, 1] × its budget
 #pragma once
 

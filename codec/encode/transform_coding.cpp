@@ -6,12 +6,12 @@
 #include <unordered_map>
 
 #include "common/frame_sequence.h"
+#include "common/parallel.h"
 #include "common/reconstruction.h"
 #include "common/stream_format.h"
 #include "decode/frame_decoder.h"
 #include "decode/transform_residuals.h"
 #include "encode/metrics.h"
-#include "encode/parallel.h"
 #include "encode/rate_control.h"
 #include "encode/transform_symbols.h"
 

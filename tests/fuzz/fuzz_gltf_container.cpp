@@ -14,9 +14,9 @@
 #include <fstream>
 #include <string>
 
-#include "compressed.h"
-#include "gltf_io.h"
-#include "sample.h"
+#include "decoding/decode_file.h"
+#include "gltf/gltf_io.h"
+#include "sampling/sample.h"
 
 namespace {
 

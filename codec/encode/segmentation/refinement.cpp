@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 
-#include "encode/parallel.h"
+#include "common/parallel.h"
 
 namespace segmorph {
 namespace {
