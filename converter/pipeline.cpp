@@ -247,15 +247,19 @@ Status save_decoded_frames(const std::vector<DecodedFrames>& frames, const std::
 
 Status verify(const Model& original, const Model& compressed, const SampleSettings& settings, VerifyReport& report,
               const Progress& progress) {
+  report.failed_model = 1;  // also when it fails outside the steps below (an allocation)
   return guarded([&]() -> Status {
     SampledFile reference, other;
+    report = VerifyReport();
+    report.failed_model = 0;
     SEGMORPH_RETURN_IF_ERROR(analyze_model(original.data().gltf, settings, true, progress, reference));
+    report.failed_model = 1;
     SEGMORPH_RETURN_IF_ERROR(analyze_model(compressed.data().gltf, settings, false, progress, other));
     report_progress(progress, "comparing at the frame times of the original");
     AnimationComparison comparison;
     SEGMORPH_RETURN_IF_ERROR(compare_animation(reference.model, reference.scene, reference.sampled, other.model,
                                                other.scene, comparison, false, nullptr, 0));  // every core
-    report = VerifyReport();
+    report.failed_model = -1;
     report.vertices = comparison.vertices;
     report.frames = comparison.frames;
     report.vertex_frames = comparison.vertex_frames;
@@ -267,6 +271,20 @@ Status verify(const Model& original, const Model& compressed, const SampleSettin
       report.primitives.push_back(primitive_error(reference.model, compared));
     return Status::Ok();
   });
+}
+
+const PrimitiveError* VerifyReport::worst() const {
+  const PrimitiveError* worst = nullptr;
+  for (const PrimitiveError& primitive : primitives)
+    if (!worst || primitive.kg_percent > worst->kg_percent) worst = &primitive;
+  return worst;
+}
+
+VerifyBound exceeded_bound(const VerifyReport& report, size_t bytes, const VerifyBounds& bounds) {
+  if (bounds.max_error >= 0 && report.kg_percent > bounds.max_error) return VerifyBound::max_error;
+  if (bounds.max_bpvf >= 0 && bits_per_vertex_frame(bytes, report.vertex_frames) > bounds.max_bpvf)
+    return VerifyBound::max_bpvf;
+  return VerifyBound::none;
 }
 
 }  // namespace segmorph

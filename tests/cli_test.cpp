@@ -1,5 +1,6 @@
 // The command-line tool as a user meets it: exit codes, one-line errors, no partial output.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -1551,4 +1552,36 @@ TEST(Cli, BadVertexCachesFailCleanly) {
   fs::remove(sequence + "/flag_0012.obj");
   expect_clean_failure(sequence, "frame 12 is missing", "bake");
   expect_clean_failure(sequence + "/flag_%04d.obj", "frame 12 is missing", "encode");
+}
+
+// --json prints one valid JSON object per line, whatever the file names hold: quotes, backslashes, control
+// characters and bytes that are not UTF-8 (written as U+FFFD).
+TEST(Cli, JsonIsValidForAnyFileName) {
+  const std::string directory = output_directory("json");
+  const std::string name = directory + "/we\"ird\\name\t\xff.glb", encoded = directory + "/out.glb";
+  fs::copy_file(sample("AnimatedMorphCube/AnimatedMorphCube.glb"), name);
+  const std::string quoted = "'" + name + "'";
+  const Result results[] = {run("info -q " + quoted + " --json"),
+                            run("encode -q " + quoted + " -o " + encoded + " --json"),
+                            run("verify -q " + quoted + " " + encoded + " --json --max-error 1e-9"),
+                            run("info -q '" + directory + "/missing\"\xff.glb' --json")};
+  const int exit_codes[] = {0, 0, 1, 1};
+  const std::string keys[] = {"primitives", "primitives", "error", "error"};
+  for (size_t i = 0; i < 4; ++i) {
+    SCOPED_TRACE(results[i].out + results[i].err);
+    EXPECT_EQ(results[i].exit_code, exit_codes[i]);
+    ASSERT_EQ(std::count(results[i].out.begin(), results[i].out.end(), '\n'), 1);
+    const nlohmann::json json = nlohmann::json::parse(results[i].out, nullptr, false);
+    ASSERT_FALSE(json.is_discarded());
+    EXPECT_TRUE(json.contains(keys[i]));
+    const std::string file = json.contains("file")        ? json["file"].get<std::string>()
+                             : json.contains("compressed") ? json["original"].get<std::string>()
+                                                           : json["error"]["file"].get<std::string>();
+    EXPECT_NE(file.find("\xef\xbf\xbd"), std::string::npos) << "the byte 0xff as U+FFFD";
+    EXPECT_NE(file.find('"'), std::string::npos);
+  }
+  EXPECT_EQ(results[1].out.find("\"file\":\"" + directory + "/we\\\"ird\\\\name\\t\xef\xbf\xbd.glb\""),
+            size_t(results[1].out.find("\"file\":")));
+  EXPECT_GT(nlohmann::json::parse(results[2].out)["vertex_frames"].get<double>(), 0);
+  EXPECT_EQ(nlohmann::json::parse(results[2].out)["error"]["code"], "above_bound");
 }

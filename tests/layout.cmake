@@ -1,8 +1,8 @@
 # The layout as a test (docs/architecture.md): codec/common/ includes nothing of decode/ or encode/, codec/decode/
 # nothing of encode/, neither anything of the pipeline (segmorph/segmorph.h, segmorph/encoding.h); the runtime
 # decoder's library defines no symbol of the encoder (its range encoder, models' encode(), stream and track
-# writers); extensions/ includes nothing of converter/. Run as cmake -DSOURCE_DIR=... -DDECODER_LIBRARY=... -DNM=...
-# -P layout.cmake.
+# writers); extensions/ includes nothing of converter/; converter/cli/ nothing but the public API. Run as
+# cmake -DSOURCE_DIR=... -DDECODER_LIBRARY=... -DNM=... -P layout.cmake.
 set(CODEC_DIR ${SOURCE_DIR}/codec)
 set(problems)
 foreach(side common decode)
@@ -23,8 +23,19 @@ endforeach()
 # extensions/ is below the pipeline: none of converter/'s folders or headers, nor the pipeline API.
 file(GLOB sources ${SOURCE_DIR}/extensions/*.h ${SOURCE_DIR}/extensions/*.cpp)
 foreach(source ${sources})
-  file(STRINGS ${source} includes REGEX
-       "^#include \"((bake|caches|cli|decoding|encoding|gltf|sampling|verify)/|pipeline\\.h|file_names\\.h|segmorph/segmorph\\.h)")
+  set(converter "(bake|caches|cli|decoding|encoding|gltf|sampling|verify)/|pipeline\\.h|file_names\\.h")
+  file(STRINGS ${source} includes REGEX "^#include \"(${converter}|segmorph/segmorph\\.h)")
+  foreach(line ${includes})
+    list(APPEND problems "${source}: ${line}")
+  endforeach()
+endforeach()
+
+# converter/cli/ is printing over the pipeline API: its own files, the public headers and output_file.h (the
+# temporary files a signal removes) only.
+file(GLOB sources ${SOURCE_DIR}/converter/cli/*.h ${SOURCE_DIR}/converter/cli/*.cpp)
+foreach(source ${sources})
+  file(STRINGS ${source} includes REGEX "^#include \"")
+  list(FILTER includes EXCLUDE REGEX "^#include \"(cli/|segmorph/|gltf/output_file\\.h\")")
   foreach(line ${includes})
     list(APPEND problems "${source}: ${line}")
   endforeach()
@@ -48,4 +59,4 @@ if(problems)
   message(FATAL_ERROR "${text}")
 endif()
 message(STATUS "layout: common/ and decode/ include nothing of encode/, the decoder defines no encoder symbol, "
-               "extensions/ includes nothing of converter/")
+               "extensions/ includes nothing of converter/, cli/ only the public API")

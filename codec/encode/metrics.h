@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/frame_sequence.h"
+#include "segmorph/encoding.h"  // bits_per_vertex_frame over V × F summed
 
 namespace segmorph {
 
@@ -67,9 +68,6 @@ inline double bits_per_vertex_frame(size_t bytes, size_t vertex_count, size_t fr
   return vertex_count && frame_count ? 8.0 * double(bytes) / (double(vertex_count) * double(frame_count)) : 0.0;
 }
 
-// The same over `vertex_frames`, V × F summed over several primitives (0 when there are none).
-inline double bits_per_vertex_frame(size_t bytes, double vertex_frames) {
-  return vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0.0;
-}
+// The same over `vertex_frames`: segmorph/encoding.h.
 
 }  // namespace segmorph

@@ -409,6 +409,7 @@ Status Model::load_cache(const CacheSource& source, Model& model, CacheReport* r
                    (has_suffix(source.mesh, ".obj") ? " (v lines)" : " (vertices)"));
       const bool pc2 = reader.format() == PointCacheReader::Format::pc2;
       out.format = pc2 ? "PC2" : "MDD";
+      out.own_times = !pc2;
       if (pc2) {
         frames_per_second = source.fps / double(reader.pc2_rate());
         times = grid_times(double(reader.pc2_start()) / source.fps, reader.frame_count(), frames_per_second);

@@ -14,6 +14,7 @@
 #include <system_error>
 #include <thread>
 
+#include "cli/reports.h"
 #include "segmorph/segmorph.h"
 
 namespace segmorph {
@@ -100,8 +101,7 @@ int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, i
     std::fprintf(stderr, "segmorph: error: %s: cannot create the folder: %s\n", options.output_directory.c_str(),
                  failure.message().c_str());
     if (options.json)
-      std::printf("{\"error\":{\"code\":\"io_error\",\"file\":%s,\"message\":\"cannot create the folder\"}}\n",
-                  json_string(options.output_directory).c_str());
+      std::printf("%s\n", error_json("io_error", options.output_directory, "cannot create the folder").c_str());
     return 1;
   }
   struct sigaction action, previous_interrupt, previous_terminate;
@@ -182,8 +182,7 @@ int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, i
                                  strsignal(WTERMSIG(status)) + ")";
         std::fprintf(stderr, "segmorph: error: %s: %s\n", input.c_str(), what.c_str());
         if (options.json)
-          report += "{\"error\":{\"code\":\"internal\",\"file\":" + json_string(input) + ",\"message\":" +
-                    json_string(what) + "}}\n";
+          report += error_json("internal", input, what) + "\n";
       }
       if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) ++failed;
       reports[child->file] = std::move(report);

@@ -368,21 +368,6 @@ bool check_command(CommandLine& line, const std::vector<Given>& given, std::stri
 
 }  // namespace
 
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\')
-      out += '\\', out += char(c);
-    else if (c < 0x20) {
-      char buffer[8];
-      std::snprintf(buffer, sizeof(buffer), "\\u%04x", c);
-      out += buffer;
-    } else
-      out += char(c);
-  }
-  return out + "\"";
-}
-
 std::string usage() {
   std::string text = kCommands;
   for (const Option& option : kOptions) text += option_help(option);

@@ -36,8 +36,6 @@ enum class ParseResult { run, help, version, usage_error };
 // the command does not use is refused.
 ParseResult parse_command_line(int argc, const char* const* argv, CommandLine& line, std::string& error);
 
-// `s` as a JSON string literal, quoted and escaped (the JSON the tool prints).
-std::string json_string(const std::string& s);
 
 // --help: the commands, then every option with its range, then the exit statuses.
 std::string usage();

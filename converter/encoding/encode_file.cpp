@@ -356,6 +356,16 @@ Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinyglt
   report.ms_draco = encoded.report.ms_draco;
   report.kept_skins_floor = encoded.kept_skins_floor;
   report.vertex_frames = vertex_frames(file.sampled);
+  for (const StreamReport& stream : report.streams) {
+    report.clusters += stream.clusters;
+    report.e_pi_morse = std::max(report.e_pi_morse, stream.e_pi_morse);
+    report.e_pi = std::max(report.e_pi, stream.e_pi);
+    report.ms_segmentation += stream.ms_segmentation;
+    report.ms_motion += stream.ms_motion;
+    report.ms_prediction += stream.ms_prediction;
+    report.ms_rate_control += stream.ms_rate_control;
+    report.ms_entropy += stream.ms_entropy;
+  }
   return Status::Ok();
 }
 

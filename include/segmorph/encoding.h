@@ -12,6 +12,12 @@ enum class RateMode {
   lossless,  // restore the input floats bit for bit
 };
 
+// Bits per vertex per frame of `bytes` over `vertex_frames`, V × F summed over the primitives and clips coded (0 when
+// there are none): the rate every report and target of segmorph is in.
+inline double bits_per_vertex_frame(size_t bytes, double vertex_frames) {
+  return vertex_frames > 0 ? 8.0 * double(bytes) / vertex_frames : 0.0;
+}
+
 // One animation stream of a primitive coded as frames or kept targets, as the codec made it.
 struct StreamReport {
   int mesh = -1, primitive = -1;  // the primitive of the encoded file it animates

@@ -103,6 +103,7 @@ struct CacheSource {
 
 struct CacheReport {
   std::string format;  // "OBJ sequence", "PC2" or "MDD"
+  bool own_times = false;  // the cache gives each frame's time (MDD), rather than a number at CacheSource::fps
   size_t points = 0;   // the cache's points (the OBJ's v lines)
   size_t vertices = 0, frames = 0;  // of the glTF primitive(s) it became
   double first_time = 0, last_time = 0;  // seconds
@@ -110,6 +111,37 @@ struct CacheReport {
   // the cache's own rate above that.
   SampleSettings sampling;
 };
+
+// --- inputs ---
+
+// One input of a command as a user names it: a glTF file (.glb or .gltf; "-": the standard input), an OBJ sequence
+// (a folder, or a printf pattern with a % that is not a glTF's name), or a base mesh with its point cache.
+struct Input {
+  std::string path;
+  std::string cache;   // a PC2 or MDD point cache that moves `path` (an .obj, .glb or .gltf); empty otherwise
+  bool z_up = false;   // CacheSource::z_up
+  bool caches = true;  // false: `path` is read as a glTF whatever its name (decode reads nothing else)
+};
+
+enum class InputKind { gltf, obj_sequence, point_cache };
+InputKind input_kind(const Input& input);
+
+// Reads `input` into `model` (a glTF with Model::load, a vertex cache with Model::load_cache) and gives in `sampling`
+// how to sample it: `requested` for a glTF (whose fps is also an OBJ sequence's and a PC2 cache's frame rate, as
+// CacheSource::fps), a cache's own frames (CacheReport::sampling) for a vertex cache, unless an MDD cache is resampled
+// at a requested fps. Refuses an .obj alone and a point cache given as the input, saying what to give instead (unless
+// input.caches is false). Progress: what it reads, the loader's warnings, what a cache held. `cache`, when given,
+// receives a vertex cache's report.
+Status load_input(const Input& input, const SampleSettings& requested, Model& model, SampleSettings& sampling,
+                  const Progress& progress = {}, CacheReport* cache = nullptr);
+
+// The bytes of `input` as a server sends them: its files (a glTF's with its .bin and images; a point cache and its
+// mesh); for an OBJ sequence or the standard input, those of the glTF it reads as (`model`, as a .glb).
+size_t input_bytes(const Input& input, const Model& model);
+
+// The bytes a save() of `saved` to `path` wrote, as a server sends them (the file and the .bin beside a .gltf); for
+// the standard output ("-"), the .glb's. 0 when the file cannot be read back.
+size_t saved_bytes(const std::string& path, const Model& saved);
 
 // --- info ---
 
@@ -242,6 +274,10 @@ struct EncodeReport {
   double ms_tracks = 0;   // coding the tracks (with kept skins: the search for their precision)
   double ms_measure = 0;  // decoding the encode and measuring it against the input
   double kept_skins_floor = 0;  // > 0: kept skins stayed at this KG % above the target, and were baked instead
+  // Over `streams`: their clusters, the largest E(Π) before and after merging to K, and each stage's milliseconds.
+  size_t clusters = 0;
+  double e_pi_morse = 0, e_pi = 0;
+  double ms_segmentation = 0, ms_motion = 0, ms_prediction = 0, ms_rate_control = 0, ms_entropy = 0;
 };
 
 // Encodes `input` (which may be any glTF with animation) into `output`: every animated primitive's first frame with
@@ -297,12 +333,27 @@ struct VerifyReport {
   double kg_percent = 0, rmse_over_diagonal = 0, max_error_over_diagonal = 0;
   size_t animation_bytes = 0;  // the compressed file's SEGMORPH streams
   std::vector<PrimitiveError> primitives;  // every animated primitive of the original
+  // When verify fails, which model it is about: 0 the original (it cannot be sampled), 1 the compressed one.
+  int failed_model = -1;
+
+  // The primitive with the largest KG error (nullptr when there is none).
+  const PrimitiveError* worst() const;
 };
 
 // Compares the animation of `compressed` with that of `original` (either may be encoded, baked, original or written
 // by another tool: primitives and vertices are paired by trajectory, `compressed` is sampled at `original`'s frame
-// times). A failed Status is about `compressed`, unless it is original's sampling that failed.
+// times). A failed Status is about `compressed`, unless it is original's sampling that failed (report.failed_model).
 Status verify(const Model& original, const Model& compressed, const SampleSettings& settings, VerifyReport& report,
               const Progress& progress = {});
+
+// Bounds on a verified file, for a CI gate; negative: none.
+struct VerifyBounds {
+  double max_error = -1;  // KG %
+  double max_bpvf = -1;   // bits per vertex per frame of the whole compressed file
+};
+enum class VerifyBound { none, max_error, max_bpvf };
+
+// The first bound the verified file exceeds (the error, then the rate), with `bytes` its size (input_bytes).
+VerifyBound exceeded_bound(const VerifyReport& report, size_t bytes, const VerifyBounds& bounds);
 
 }  // namespace segmorph
