@@ -24,7 +24,7 @@
 #include "encode/segmentation/diffusion.h"
 #include "encode/segmentation/segmentation.h"
 #include "encode/stream_writer.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
 #include "sample_first_animated.h"
 #include "sampling/sample.h"
 #include "segmorph/decoder_c.h"

@@ -17,7 +17,7 @@
 #include "decode/frame_decoder.h"
 #include "encode/encoder.h"
 #include "encode/metrics.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
 #include "sample_first_animated.h"
 #include "sampling/sample.h"
 #include "stand_in_base.h"

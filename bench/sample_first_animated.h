@@ -1,7 +1,7 @@
 // What the codec-level bench tools encode: the first animated node of a glTF file (needs segmorph_gltf).
 #pragma once
 
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
 #include "sampling/sample.h"
 
 namespace segmorph::bench {

@@ -10,8 +10,9 @@
 #include "decoding/decode_file.h"
 #include "encoding/encode_file.h"
 #include "file_names.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
 #include "gltf/output_file.h"
+#include "gltf/save.h"
 #include "verify/comparison.h"
 
 namespace segmorph {

@@ -9,7 +9,9 @@
 #include <memory>
 
 #include "accessor.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
+#include "gltf/packing.h"
+#include "gltf/save.h"
 #include "sampling/sample.h"
 #include "test_files.h"
 

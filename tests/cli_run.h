@@ -18,7 +18,7 @@
 #include <sstream>
 
 #include "accessor.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
 #include "test_files.h"
 
 namespace cli_testing {

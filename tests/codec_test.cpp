@@ -18,7 +18,7 @@
 #include "encode/metrics.h"
 #include "encode/stream_writer.h"
 #include "fuzz/fuzz_base_mesh.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
 #include "sampling/sample.h"
 #include "test_files.h"
 #include "test_meshes.h"

@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "bake/bake.h"
-#include "gltf/gltf_io.h"
+#include "gltf/delivered_size.h"
+#include "gltf/load.h"
+#include "gltf/save.h"
 #include "gltf_builder.h"
 #include "sampling/sample.h"
 #include "segmorph_extension.h"

@@ -10,7 +10,7 @@
 #include <set>
 
 #include "accessor.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
 #include "sampling/sample.h"
 #include "test_files.h"
 #include "test_meshes.h"

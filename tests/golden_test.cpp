@@ -28,7 +28,7 @@
 #include "decode/track_decoder.h"
 #include "decoding/decode_file.h"
 #include "encode/track_encoder.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
 #include "sampling/sample.h"
 #include "test_files.h"
 

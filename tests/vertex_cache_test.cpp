@@ -10,7 +10,7 @@
 #include "cache_files.h"
 #include "caches/obj_reader.h"
 #include "encode/metrics.h"
-#include "gltf/gltf_io.h"
+#include "gltf/save.h"
 #include "gltf_builder.h"
 #include "pipeline.h"
 #include "test_files.h"

@@ -13,7 +13,8 @@
 #include "caches/obj_reader.h"
 #include "caches/point_cache.h"
 #include "file_names.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
+#include "gltf/packing.h"
 #include "pipeline.h"
 
 namespace segmorph {

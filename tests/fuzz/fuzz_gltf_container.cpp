@@ -15,7 +15,8 @@
 #include <string>
 
 #include "decoding/decode_file.h"
-#include "gltf/gltf_io.h"
+#include "gltf/load.h"
+#include "gltf/packing.h"
 #include "sampling/sample.h"
 
 namespace {
