@@ -20,7 +20,7 @@
 #include "decode/stream_reader.h"
 #include "encode/encoder.h"
 #include "encode/motion.h"
-#include "encode/rate_control.h"
+#include "encode/rate_distortion.h"
 #include "encode/segmentation/diffusion.h"
 #include "encode/segmentation/segmentation.h"
 #include "encode/stream_writer.h"

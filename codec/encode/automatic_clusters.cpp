@@ -6,7 +6,7 @@
 
 #include "common/stream_format.h"
 #include "encode/motion_quantization.h"
-#include "encode/rate_control.h"
+#include "encode/rate_distortion.h"
 #include "encode/segmentation/refinement.h"
 #include "encode/segmentation/segmentation.h"
 #include "encode/stream_writer.h"

@@ -1,4 +1,4 @@
-// What encode_animation's stages share (encoder.cpp, automatic_clusters.cpp, rate_control_driver.cpp): the primitive
+// What encode_animation's stages share (encoder.cpp, automatic_clusters.cpp, rate_control.cpp): the primitive
 // welded, its trajectories, the decoder's welded base and residual traversal, and the scales the steps start from.
 #pragma once
 
@@ -39,6 +39,18 @@ struct EncodeProblem {
   // The KG target as squared distortion: (E / 100)² × spread.
   double max_distortion() const { return std::pow(settings.target / 100.0, 2) * spread; }
 };
+
+// encode_animation's first stages, in order; a stage's own test sets up its problem with them.
+// The welded problem: topology, the stream's header fields (in `content`), trajectories, the decoder's welded base
+// and traversal.
+Status set_up_problem(EncodeProblem& problem, StreamContent& content);
+// The Morse segmentation of the first frame as sampled (diffusion, Morse function, levels), its E(Π)
+// (report.e_pi_morse), and the concavity refinement of its levels (Eq. 6): `segmentations` receives the refined
+// clusters, or with settings.choose_segmentation the Morse clusters and then the refined ones (when they differ).
+Status segment_first_frame(const EncodeProblem& problem, std::vector<Clusters>& segmentations, StreamReport& report);
+// The scale of the residual steps: from the target error when there is one, else from the motion error (E(Π) of
+// the Morse segmentation); and the finest step any lossy quantizer may take.
+void set_step_scales(EncodeProblem& problem, double e_pi_morse);
 
 // Reports a stage of the encode and the fraction of it done (negative: not known) to the settings' progress, if any.
 inline void report_progress(const CodecSettings& settings, const std::string& stage, double fraction = -1) {

@@ -14,7 +14,7 @@
 #include "encode/encoder.h"
 #include "encode/metrics.h"
 #include "encode/rate_control.h"
-#include "encode/rate_control_driver.h"
+#include "encode/rate_distortion.h"
 #include "encode/segmentation/curvature.h"
 #include "encode/segmentation/diffusion.h"
 #include "encode/segmentation/laplacian.h"
@@ -66,10 +66,7 @@ double expected_residual_step(const std::vector<FrameSequence>& clips, double sp
   return std::sqrt(12.0 * spread / double(std::max<size_t>(samples, 1))) * kg_percent / 100.0;
 }
 
-namespace {
-
-// The welded problem: topology, the stream's header fields, trajectories, the decoder's welded base and traversal.
-Status set_up(EncodeProblem& p, StreamContent& content) {
+Status set_up_problem(EncodeProblem& p, StreamContent& content) {
   const CodecSettings& settings = p.settings;
   p.vertex_count = p.clips[0].vertex_count;
   p.topology = weld_topology(p.clips, &p.base);
@@ -100,10 +97,7 @@ Status set_up(EncodeProblem& p, StreamContent& content) {
   return Status::Ok();
 }
 
-// The Morse segmentation of the first frame as sampled (diffusion, Morse function, levels), its E(Π), and the
-// concavity refinement of its levels (Eq. 6): `segmentations` receives the refined clusters, or with
-// settings.choose_segmentation the Morse clusters and then the refined ones (when they differ).
-Status segment(const EncodeProblem& p, std::vector<Clusters>& segmentations, StreamReport& report) {
+Status segment_first_frame(const EncodeProblem& p, std::vector<Clusters>& segmentations, StreamReport& report) {
   const std::vector<double> positions = welded_positions(p.clips[0].frame(0), p.topology);
   report_progress(p.settings, "segmentation: heat diffusion (" + std::to_string(p.welded) + " vertices)");
   DiffusionSettings diffusion;
@@ -133,9 +127,7 @@ Status segment(const EncodeProblem& p, std::vector<Clusters>& segmentations, Str
   return Status::Ok();
 }
 
-// The scale of the residual steps: from the target error when there is one, else from the motion error; and the
-// finest step any lossy quantizer may take.
-void set_scales(EncodeProblem& p, double e_pi_morse) {
+void set_step_scales(EncodeProblem& p, double e_pi_morse) {
   p.spread = frame_spread(p.clips);
   p.mean_step =
       std::sqrt(12.0 * std::max(e_pi_morse, 1e-12)) * bounding_box_diagonal(p.base.data(), p.vertex_count) * 0.1;
@@ -146,6 +138,8 @@ void set_scales(EncodeProblem& p, double e_pi_morse) {
   p.finest_step = std::max(extent, 1e-30) * std::exp2(-kFinestStepBits);
   p.mean_step = std::max(p.mean_step, p.finest_step);
 }
+
+namespace {
 
 // Clips shaped as the input's (frame times, triangles, positions sized) for the decoder's frames.
 std::vector<FrameSequence> shaped_like(const std::vector<FrameSequence>& clips) {
@@ -172,7 +166,7 @@ Status try_transform(const EncodeProblem& problem, StreamContent&& content, std:
   const double budget = squared_error(problem.clips, restored);
   bool made;
   if (!required) {
-    made = transform_content(problem, std::move(content), budget, candidate, sizes);
+    made = try_transform_stream(problem, std::move(content), budget, candidate, sizes);
   } else {
     // transform_content drops the residual symbols (as large as the frames): without them, copies are small.
     content.residuals = std::vector<int64_t>();
@@ -180,10 +174,10 @@ Status try_transform(const EncodeProblem& problem, StreamContent&& content, std:
     // First as without the setting (a primitive that gets version 4 anyway gets the same stream); else at the error
     // target (the residual loop may have come closer to the frames, or to zero error), then tighter: a stream of
     // almost no residuals can be shorter than the format allows for its vertex frames (kMaxVertexFramesPerByte).
-    made = transform_content(problem, content, budget, candidate, sizes);
+    made = try_transform_stream(problem, content, budget, candidate, sizes);
     const double target = frame_spread(problem.clips) * std::pow(problem.settings.target / 100.0, 2);
     for (int tighter = 0; !made && tighter < 5; ++tighter)
-      made = transform_content(problem, content, std::max(budget, target) * std::pow(1.0 / 16, tighter), candidate,
+      made = try_transform_stream(problem, content, std::max(budget, target) * std::pow(1.0 / 16, tighter), candidate,
                                sizes);
   }
   if (required && !made)
@@ -234,13 +228,13 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   StreamReport report;
   EncodeProblem problem(clips, base, settings);
   StreamContent content;
-  SEGMORPH_RETURN_IF_ERROR(set_up(problem, content));
+  SEGMORPH_RETURN_IF_ERROR(set_up_problem(problem, content));
 
   // Segmentation, refinement, cluster count (and the residual predictions that pay).
   const auto start = EncodeClock::now();
   std::vector<Clusters> segmentations;
-  SEGMORPH_RETURN_IF_ERROR(segment(problem, segmentations, report));
-  set_scales(problem, report.e_pi_morse);
+  SEGMORPH_RETURN_IF_ERROR(segment_first_frame(problem, segmentations, report));
+  set_step_scales(problem, report.e_pi_morse);
   size_t chosen = 0;
   Clusters clusters = choose_clusters(problem, segmentations, content, &chosen);
   // The refined clusters are the last segmentation, when there is one.

@@ -2,294 +2,439 @@
 
 #include <algorithm>
 #include <cmath>
-#include <vector>
+#include <cstdint>
+#include <optional>
+#include <string>
 
-#include "common/parallel.h"
-#include "common/prediction.h"
+#include "common/reconstruction.h"
 #include "common/stream_format.h"
+#include "common/vertex_gather.h"
+#include "encode/frame_references.h"
+#include "encode/motion_quantization.h"
+#include "encode/rate_distortion.h"
+#include "encode/rate_target.h"
+#include "encode/stream_writer.h"
 
 namespace segmorph {
 namespace {
 
-// Estimated bits of a symbol stream coded with adaptive contexts: its conditional entropy given the context
-// (the magnitude class of the same vertex's previous symbol, as the stream's coder uses), plus the cost of
-// learning each context's distribution (half a bit per distinct symbol and context, roughly).
-struct EntropyCounter {
-  static constexpr int64_t kRange = 512;  // symbols in [−512, 512] are counted; larger ones are estimated
-  std::vector<uint32_t> counts = std::vector<uint32_t>(3 * (2 * kRange + 1), 0);
-  double total[3] = {0, 0, 0};
-  double large_bits = 0;
+// Frame references (stream version 3) are kept only when they promise at least 1 % fewer bytes (or, with a rate
+// target, 1 % less distortion).
+constexpr double kReferenceMinGain = 0.99;
 
-  void add(int context, int64_t symbol) {
-    if (symbol >= -kRange && symbol <= kRange) {
-      counts[size_t(context * (2 * kRange + 1) + (symbol + kRange))] += 1;
-      total[context] += 1;
-    } else {
-      // Length class and leading bits adaptive, the rest raw: about 2 log2|k| bits.
-      large_bits += 2 * std::log2(double(symbol < 0 ? -symbol : symbol)) + 2;
-    }
+// Other motion step ratios tried with an error target (which one wins depends on the sequence: docs/codec.md).
+constexpr double kMotionStepRatioTrials[] = {0.25, 1.0};
+
+class RateControlDriver {
+ public:
+  RateControlDriver(const EncodeProblem& problem, const Clusters& clusters, const AffineMotion& fitted,
+                    StreamContent& content, StreamReport& report)
+      : p_(problem),
+        settings_(problem.settings),
+        clusters_(clusters),
+        fitted_(fitted),
+        radius_(cluster_radius(problem.base_welded, fitted.centroid, clusters.label)),
+        content_(content),
+        report_(report) {}
+
+  // The motion and residual steps, as the target mode asks.
+  void choose_steps();
+  // The residual symbols for the chosen steps and the stream (with a rate target, re-encoded until it lands on it).
+  void encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored);
+
+ private:
+  void extend(const std::vector<double> (&candidates)[3]);
+  template <typename Choose>
+  void refine_steps(StepChoice& choice, Choose choose);
+  void prepare_motion(double motion_step);
+  void choose_references();
+  void drop_references();
+  void choose_motion_coding();
+  double estimated_cost();
+  bool keep_references();
+  bool references_rejected();
+  size_t side_bytes();
+  StepChoice choose();
+  void residual_rate_control(bool fresh);
+  void choose_motion_step_ratio();
+  void encode_residuals(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored);
+  void set_residual_steps() {
+    for (int axis = 0; axis < 3; ++axis) content_.residual_step[axis] = float(curves_[axis].step[choice_.index[axis]]);
   }
-  double bits() const {
-    double sum = large_bits;
-    for (int c = 0; c < 3; ++c) {
-      if (total[c] == 0) continue;
-      for (int64_t j = 0; j < 2 * kRange + 1; ++j) {
-        const double count = double(counts[size_t(c * (2 * kRange + 1) + j)]);
-        if (count == 0) continue;
-        sum -= count * std::log2(count / total[c]);
-        sum += 0.5 * std::log2(1 + total[c]);  // learning the distribution
-      }
-    }
-    return sum;
-  }
+
+  const EncodeProblem& p_;
+  const CodecSettings& settings_;
+  const Clusters& clusters_;
+  const AffineMotion& fitted_;
+  const double radius_;  // RMS cluster radius: the linear step is the translation step over it
+  StreamContent& content_;
+  StreamReport& report_;
+  double mean_step_ = 0;
+  std::optional<FramePredictions> predictions_;  // of the current motion
+  StepChoice choice_;
+  SubbandCurve curves_[3];
+  double residual_budget_ = 0;
+  StreamSizes sizes_;
+  bool references_chosen_ = false, references_checked_ = false;
+  uint8_t flags_without_references_ = 0;
+  MeasureBuffers buffers_;
 };
 
-constexpr double kIndexLimit = 1 << 30;
-
-// One vertex at `count` lanes (an axis and a step each): the residual quantized as the encoder does
-// (quantizer_index, in a form the compiler vectorizes: indices are clamped to ±2^30, which only a step far too
-// small to ever be chosen reaches), the reconstructed residual, its change from `last` and the distortion of
-// the reconstructed position.
-void quantize_lanes(size_t count, double weight, const double* __restrict p, const double* __restrict target,
-                    const double* __restrict r, const double* __restrict q, const double* __restrict inverse_q,
-                    const double* __restrict last, double* __restrict current, double* __restrict change,
-                    int32_t* __restrict symbol, double* __restrict distortion) {
-  for (size_t s = 0; s < count; ++s) {
-    double x = (target[s] - p[s] - r[s]) * inverse_q[s];
-    x = std::min(std::max(x + std::copysign(0.5, x), -kIndexLimit), kIndexLimit);
-    const int32_t k = int32_t(x);
-    const double reconstructed = r[s] + double(k) * q[s];
-    current[s] = reconstructed;
-    change[s] = reconstructed - last[s];
-    const double error = double(float(p[s] + reconstructed)) - target[s];
-    distortion[s] += weight * error * error;
-    symbol[s] = k;
-  }
-}
-
-// The subbands and steps are measured together, in one walk over the frames: every array below holds, per
-// welded vertex, one value per lane (an axis and a candidate step) side by side (position i, lane s at
-// i · S + s). The lanes' loops are independent, so the processor overlaps them instead of waiting on one
-// vertex's chain of dependent operations at a time; each lane still sees exactly the arithmetic of the
-// decoder's loop, in the same order. Arrays are by position in the traversal, so the walk reads them front to
-// back and a vertex's earlier neighbours are mostly close behind.
-void measure_lanes(const StreamContent& content, const ResidualTraversal& traversal,
-                   const FramePredictions& predictions, const std::vector<float>& targets,
-                   const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                   SubbandCurve (&curves)[3], const std::function<void(double)>& progress,
-                   std::vector<std::vector<double>>& spare) {
-  const size_t welded = multiplicity.size();
-  const bool temporal = content.flags & format::kFlagTemporalResiduals;
-  const bool spatial = content.flags & format::kFlagSpatialResiduals;
-  std::vector<size_t> lane_axis;
-  std::vector<double> q, inverse_q;
+// Measures more candidate steps of the subbands (those not measured yet; candidates[axis]) and adds them to their
+// curves, all in one walk.
+void RateControlDriver::extend(const std::vector<double> (&candidates)[3]) {
+  std::vector<double> steps[3];
   for (int axis = 0; axis < 3; ++axis)
-    for (double step : steps[axis]) {
-      lane_axis.push_back(size_t(axis));
-      q.push_back(double(float(step)));  // the stream stores steps as float
-      inverse_q.push_back(1.0 / q.back());
+    for (double candidate : candidates[axis]) {
+      const double step = std::max(candidate, p_.finest_step);
+      const std::vector<double>& measured = curves_[axis].step;
+      if (std::find(measured.begin(), measured.end(), double(float(step))) == measured.end() &&
+          std::find(steps[axis].begin(), steps[axis].end(), step) == steps[axis].end())
+        steps[axis].push_back(step);
     }
-  const size_t count = q.size();
-  if (count == 0) return;
-  std::vector<double> distortion(count, 0.0), sum(count), r(count), zeros(count, 0.0), p(count), target(count);
-  std::vector<double> change(welded * count, 0.0);
-  std::vector<int32_t> previous_symbol(welded * count), current_symbol(welded * count);
-  std::vector<EntropyCounter> entropy(count);
-  std::vector<double> predicted(welded * 3);  // in welded order
-  std::vector<double> frame_prediction(welded * 3), frame_target(welded * 3), frame_weight(welded);
-  for (size_t v = 0; v < welded; ++v) frame_weight[traversal.position[v]] = multiplicity[v];
-  // Each frame's lanes' residuals are held while a later frame may use them as its reference: the next frame of the
-  // clip, or a later one that references it from further back (until the last). Frames without a reference read
-  // zeros (as without temporal residuals: the same doubles). The buffers are reused.
-  const size_t frame_count = content.frame_count();
-  std::vector<size_t> last_use(frame_count, 0);
-  for (size_t c = 0, first = 0; c < content.clip_frames.size(); first += content.clip_frames[c++])
-    for (size_t f = 0; f < content.clip_frames[c]; ++f) {
-      const size_t back = frame_reference(content, first + f, f);
-      if (back > 0) last_use[first + f - back] = std::max(last_use[first + f - back], first + f);
-    }
-  std::vector<std::pair<size_t, std::vector<double>>> held;  // (frame, its lanes' residuals)
-  size_t frame = 0;
-  for (uint32_t frames : content.clip_frames) {
-    std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
-    for (uint32_t f = 0; f < frames; ++f, ++frame) {
-      // This frame's predictions and targets, by position in the traversal.
-      predictions.predict(frame, predicted.data());
-      for (size_t v = 0; v < welded; ++v)
-        for (size_t axis = 0; axis < 3; ++axis) {
-          frame_prediction[traversal.position[v] * 3 + axis] = predicted[v * 3 + axis];
-          frame_target[traversal.position[v] * 3 + axis] = double(targets[(frame * welded + v) * 3 + axis]);
-        }
-      // The reference's residuals (the temporal prediction), and this frame's.
-      const size_t back = frame_reference(content, frame, f);
-      const double* reference = nullptr;  // none: zeros
-      for (const auto& entry : held)
-        if (back > 0 && entry.first == frame - back) reference = entry.second.data();
-      std::vector<double> current;
-      if (!spare.empty()) current = std::move(spare.back()), spare.pop_back();
-      current.resize(welded * count);
-      for (size_t position = 0; position < welded; ++position) {
-        const uint32_t begin = traversal.earlier_offset[position], end = traversal.earlier_offset[position + 1];
-        const size_t at = position * count;
-        for (size_t s = 0; s < count; ++s) {
-          p[s] = frame_prediction[position * 3 + lane_axis[s]];
-          target[s] = frame_target[position * 3 + lane_axis[s]];
-        }
-        const double* last = temporal && reference ? &reference[at] : zeros.data();
-        for (size_t s = 0; s < count; ++s) r[s] = last[s];
-        if (spatial && end > begin) {
-          std::fill(sum.begin(), sum.end(), 0.0);
-          for (uint32_t j = begin; j < end; ++j) {
-            const double* c = &change[size_t(traversal.earlier[j]) * count];
-            for (size_t s = 0; s < count; ++s) sum[s] += c[s];
-          }
-          const double inverse_n = 1.0 / double(end - begin);
-          for (size_t s = 0; s < count; ++s) r[s] += sum[s] * inverse_n;
-        }
-        quantize_lanes(count, frame_weight[position], p.data(), target.data(), r.data(), q.data(), inverse_q.data(),
-                       last, &current[at], &change[at], &current_symbol[at], distortion.data());
-        for (size_t s = 0; s < count; ++s) {
-          const int32_t before = previous_symbol[at + s], magnitude = before < 0 ? -before : before;
-          entropy[s].add(std::min(magnitude, 2), current_symbol[at + s]);
-        }
-      }
-      // Let go of the frames nothing after this one uses; hold this one if something does.
-      for (size_t i = 0; i < held.size();)
-        if (last_use[held[i].first] <= frame) {
-          spare.push_back(std::move(held[i].second));
-          held.erase(held.begin() + std::ptrdiff_t(i));
-        } else {
-          ++i;
-        }
-      if (last_use[frame] > frame)
-        held.emplace_back(frame, std::move(current));
-      else
-        spare.push_back(std::move(current));
-      previous_symbol.swap(current_symbol);
-      if (progress) progress(double(frame + 1) / double(frame_count));
-    }
-  }
-  for (auto& entry : held) spare.push_back(std::move(entry.second));
-  for (size_t s = 0; s < count; ++s) {
-    SubbandCurve& curve = curves[lane_axis[s]];
-    curve.step.push_back(q[s]);
-    curve.distortion.push_back(distortion[s]);
-    curve.bits.push_back(entropy[s].bits());
-  }
+  const std::string stage =
+      "rate control: measuring " + std::to_string(steps[0].size() + steps[1].size() + steps[2].size()) + " steps";
+  report_progress(settings_, stage, 0);
+  measure_subbands(content_, p_.traversal, *predictions_, p_.trajectories.positions, p_.multiplicity, steps, curves_,
+                   settings_.threads, [&](double fraction) { report_progress(settings_, stage, fraction); }, &buffers_);
 }
 
-}  // namespace
-
-// The lanes split into contiguous ranges, one walk over the frames per thread (a lane's arithmetic does not depend
-// on the others'), the ranges' measurements appended in lane order: the same curves for every thread count.
-void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
-                      const FramePredictions& predictions, const std::vector<float>& targets,
-                      const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
-                      SubbandCurve (&curves)[3], size_t threads, const std::function<void(double)>& progress,
-                      MeasureBuffers* buffers) {
-  const size_t lanes = steps[0].size() + steps[1].size() + steps[2].size();
-  // Each range predicts and walks every frame: at least two lanes a thread make that worth it.
-  const size_t ranges = std::min(thread_count(threads), std::max<size_t>(lanes / 2, 1));
-  struct Curves {
-    SubbandCurve axis[3];
-  };
-  std::vector<Curves> measured(ranges);
-  MeasureBuffers local;
-  MeasureBuffers& reused = buffers ? *buffers : local;
-  if (reused.spare.size() < ranges) reused.spare.resize(ranges);
-  std::vector<size_t> range_begin(ranges + 1);
-  for (size_t r = 0; r <= ranges; ++r) range_begin[r] = lanes * r / ranges;
-  parallel_ranges(ranges, ranges, [&](size_t begin, size_t end) {
-    for (size_t r = begin; r < end; ++r) {
-      // The range's lanes, axis by axis (lanes are numbered axis after axis).
-      std::vector<double> subset[3];
-      size_t lane = 0;
-      for (int axis = 0; axis < 3; ++axis)
-        for (double step : steps[axis]) {
-          if (lane >= range_begin[r] && lane < range_begin[r + 1]) subset[axis].push_back(step);
-          ++lane;
-        }
-      // The first range runs on the calling thread: it reports.
-      measure_lanes(content, traversal, predictions, targets, multiplicity, subset, measured[r].axis,
-                    r == 0 ? progress : std::function<void(double)>(), reused.spare[r]);
-    }
-  });
-  for (size_t r = 0; r < ranges; ++r)
+// Adds to each subband's curve the steps around its current choice (2^(j/4) apart, j = ±1, ±2), after widening the
+// range while a choice sits on its edge (very low or very high targets); then chooses again.
+template <typename Choose>
+void RateControlDriver::refine_steps(StepChoice& choice, Choose choose) {
+  for (int widen = 0; widen < 6; ++widen) {
+    std::vector<double> beyond[3];
     for (int axis = 0; axis < 3; ++axis) {
-      const SubbandCurve& from = measured[r].axis[axis];
-      SubbandCurve& to = curves[axis];
-      to.step.insert(to.step.end(), from.step.begin(), from.step.end());
-      to.distortion.insert(to.distortion.end(), from.distortion.begin(), from.distortion.end());
-      to.bits.insert(to.bits.end(), from.bits.begin(), from.bits.end());
+      const std::vector<double>& measured = curves_[axis].step;
+      const double chosen = measured[choice.index[axis]];
+      const bool top = chosen == *std::max_element(measured.begin(), measured.end());
+      const bool bottom = chosen == *std::min_element(measured.begin(), measured.end());
+      if (!top && !bottom) continue;
+      for (int j = 1; j <= 4; ++j) beyond[axis].push_back(chosen * std::exp2(top ? j : -j));
     }
+    if (beyond[0].empty() && beyond[1].empty() && beyond[2].empty()) break;
+    extend(beyond);
+    choice = choose();
+  }
+  std::vector<double> fine[3];
+  for (int axis = 0; axis < 3; ++axis)
+    for (int j = -2; j <= 2; ++j)
+      if (j != 0) fine[axis].push_back(curves_[axis].step[choice.index[axis]] * std::exp2(j / 4.0));
+  extend(fine);
+  choice = choose();
 }
 
-StepChoice choose_steps(const SubbandCurve (&curves)[3], double lambda) {
-  StepChoice choice;
+// Quantized motion and weights for a motion step (translation step; the linear step is it over the RMS cluster
+// radius), and the predictions they give.
+void RateControlDriver::prepare_motion(double motion_step) {
+  auto begin = EncodeClock::now();
+  report_progress(settings_, "rate control: quantizing the motion");
+  motion_step = std::max(motion_step, p_.finest_step);
+  const bool lossless = settings_.mode == RateMode::lossless;
+  quantize_motion_and_weights(fitted_, lossless ? 1e-6 : motion_step / radius_, lossless ? 1e-6 * radius_ : motion_step,
+                              p_.base_welded, p_.trajectories, clusters_, p_.adjacency, settings_.blend_weights,
+                              content_);
+  if (!references_chosen_) choose_references();
+  choose_motion_coding();
+  report_.ms_motion += milliseconds_since(begin);
+  begin = EncodeClock::now();
+  predictions_.emplace(content_, p_.base_welded);
+  report_.ms_prediction += milliseconds_since(begin);
+}
+
+// Each frame's reference, once, on the first quantized motion (the motion step trials change it little): version 3's
+// references when some frame gains by one (choose_frame_references's estimate, checked by keep_references() or, for
+// lossless streams, by encode()), else the stream stays version 1 or 2.
+void RateControlDriver::choose_references() {
+  references_chosen_ = true;
+  flags_without_references_ = content_.flags;
+  if (!settings_.frame_references || !settings_.temporal_residuals) return;
+  report_progress(settings_, "rate control: choosing each frame's reference");
+  FrameReferences chosen = choose_frame_references(content_, p_.traversal, p_.base_welded, p_.trajectories.positions,
+                                                   largest_reference_window(p_.vertex_count), mean_step_);
+  if (!chosen.needed) return;
+  content_.flags |= format::kFlagFrameReferences | format::kFlagTemporalResiduals;
+  content_.reference_window = chosen.window;
+  content_.references = std::move(chosen.references);
+}
+
+void RateControlDriver::drop_references() {
+  const uint8_t temporal = format::kFlagTemporalResiduals;
+  content_.flags = uint8_t((content_.flags & ~(format::kFlagFrameReferences | temporal)) |
+                           (flags_without_references_ & temporal));
+  content_.reference_window = 0;
+  content_.references.clear();
+  choose_motion_coding();
+}
+
+// The motion's coding, whichever of version 3's takes fewest bytes: the plain differences, in contexts, or in contexts
+// and predicted linearly; then the weights' coding, plain or in contexts (ties to the plainer, which more decoders
+// read). The two are separate sections of the head: each is chosen on its own.
+void RateControlDriver::choose_motion_coding() {
+  const uint8_t contexts = format::kFlagMotionContexts, linear = format::kFlagLinearMotion;
+  const uint8_t weights = format::kFlagWeightContexts;
+  content_.flags &= uint8_t(~(contexts | linear | weights));
+  if (!settings_.motion_contexts && !settings_.weight_contexts) return;
+  size_t best = side_bytes();
+  uint8_t best_flags = content_.flags;
+  if (settings_.motion_contexts)
+    for (uint8_t option : {contexts, uint8_t(contexts | linear)}) {
+      content_.flags = uint8_t((content_.flags & ~(contexts | linear)) | option);
+      const size_t bytes = side_bytes();
+      if (bytes < best) best = bytes, best_flags = content_.flags;
+    }
+  content_.flags = best_flags;
+  if (!settings_.weight_contexts || content_.weight_cluster.empty()) return;
+  content_.flags |= weights;
+  if (side_bytes() >= best) content_.flags = best_flags;
+}
+
+// What the current curves promise: with an error target the stream's estimated bytes, with a rate target the
+// distortion within its budget (smaller is better).
+double RateControlDriver::estimated_cost() {
+  if (settings_.mode == RateMode::bpvf)
+    residual_budget_ = std::max(0.0, settings_.target * double(p_.vertex_count) * double(p_.frames_total) -
+                                         8.0 * double(side_bytes() + settings_.outside_bytes));
+  const StepChoice choice = choose();
+  return settings_.mode == RateMode::error ? double(side_bytes()) + choice.bits / 8 : choice.distortion;
+}
+
+// Whether the references stay: they do if they promise a stream at least kReferenceMinGain smaller than without them,
+// both measured at the steps around the ones chosen with them. An earlier frame that
+// predicts a frame better breaks the chain of previous frames, which the motion's deltas and the residual code's
+// contexts follow, and on short or small sequences that can cost more than it saves. Returns with the references
+// dropped when they go.
+bool RateControlDriver::keep_references() {
+  const auto begin = EncodeClock::now();
+  // Both measured at the same steps: those around the ones chosen with the references.
+  std::vector<double> near[3];
   for (int axis = 0; axis < 3; ++axis) {
-    const SubbandCurve& curve = curves[axis];
-    size_t best = 0;
-    for (size_t j = 1; j < curve.step.size(); ++j)
-      if (curve.distortion[j] + lambda * curve.bits[j] < curve.distortion[best] + lambda * curve.bits[best]) best = j;
-    choice.index[axis] = best;
-    choice.distortion += curve.distortion[best];
-    choice.bits += curve.bits[best];
+    const double chosen = curves_[axis].step[choice_.index[axis]];
+    for (int j = -1; j <= 1; ++j) near[axis].push_back(chosen * std::exp2(j / 4.0));
   }
-  return choice;
+  auto cost_near = [&] {
+    for (SubbandCurve& curve : curves_) curve = SubbandCurve();
+    extend(near);
+    return estimated_cost();
+  };
+  const uint8_t kept_flags = content_.flags;
+  const uint32_t kept_window = content_.reference_window;
+  std::vector<uint32_t> kept_references = content_.references;
+  const SubbandCurve with_curves[3] = {curves_[0], curves_[1], curves_[2]};
+  const StepChoice with_choice = choice_;
+  const double with_budget = residual_budget_;
+  const double with = cost_near();
+  drop_references();
+  const double without = cost_near();
+  report_.ms_rate_control += milliseconds_since(begin);
+  if (!(with <= kReferenceMinGain * without)) return false;
+  content_.flags = kept_flags, content_.reference_window = kept_window;
+  content_.references = std::move(kept_references);
+  for (int axis = 0; axis < 3; ++axis) curves_[axis] = with_curves[axis];
+  choice_ = with_choice, residual_budget_ = with_budget;
+  set_residual_steps();
+  return true;
 }
 
-namespace {
+// Bytes of the stream without residuals (header, welding, labels, motion, weights).
+size_t RateControlDriver::side_bytes() {
+  content_.residuals.clear();
+  content_.narrow_residuals.clear();
+  std::vector<uint8_t> side;
+  write_stream(content_, p_.base, side);
+  return side.size();
+}
 
-// Bisection on log λ between 1e-30 and 1e30 for the largest λ whose choice is still acceptable.
-template <typename Acceptable>
-StepChoice bisect(const SubbandCurve (&curves)[3], Acceptable acceptable, bool want_large) {
-  double low = -30, high = 30;  // log10 λ
-  StepChoice best = choose_steps(curves, std::pow(10.0, want_large ? low : high));
-  for (int iteration = 0; iteration < 80; ++iteration) {
-    const double middle = 0.5 * (low + high);
-    const StepChoice choice = choose_steps(curves, std::pow(10.0, middle));
-    if (acceptable(choice)) {
-      best = choice;
-      (want_large ? low : high) = middle;
-    } else {
-      (want_large ? high : low) = middle;
+StepChoice RateControlDriver::choose() {
+  return settings_.mode == RateMode::error ? steps_for_distortion(curves_, p_.max_distortion())
+                                           : steps_for_bits(curves_, residual_budget_);
+}
+
+// The residual steps for the current predictions: coarse candidates an octave apart around the expected step (unless
+// the curves already hold measurements for these predictions), then refined.
+void RateControlDriver::residual_rate_control(bool fresh) {
+  const auto begin = EncodeClock::now();
+  if (settings_.mode == RateMode::bpvf)
+    residual_budget_ = std::max(0.0, settings_.target * double(p_.vertex_count) * double(p_.frames_total) -
+                                         8.0 * double(side_bytes() + settings_.outside_bytes));
+  if (fresh) {
+    std::vector<double> coarse[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      curves_[axis] = SubbandCurve();
+      for (int j = -2; j <= 2; ++j) coarse[axis].push_back(mean_step_ * std::exp2(j));
+    }
+    extend(coarse);
+  }
+  choice_ = choose();
+  refine_steps(choice_, [this] { return choose(); });
+  set_residual_steps();
+  report_.ms_rate_control += milliseconds_since(begin);
+}
+
+// With an error target the residual step is known in advance; the motion step ratio β is chosen among a few values by
+// the estimated total size, each trial measured at the steps around the first's choice and the winner's measurements
+// then refined.
+void RateControlDriver::choose_motion_step_ratio() {
+  const double guess = mean_step_;
+  prepare_motion(kMotionStepRatio * guess);
+  residual_rate_control(true);
+  if (references_rejected()) {
+    choose_motion_step_ratio();  // again, without them
+    return;
+  }
+  const StepChoice first = choice_;
+  double best_ratio = kMotionStepRatio, best_bytes = double(side_bytes()) + choice_.bits / 8;
+  SubbandCurve best_curves[3] = {curves_[0], curves_[1], curves_[2]};
+  const SubbandCurve first_curves[3] = {curves_[0], curves_[1], curves_[2]};
+  for (double ratio : kMotionStepRatioTrials) {
+    prepare_motion(ratio * guess);
+    const auto begin = EncodeClock::now();
+    std::vector<double> near[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      curves_[axis] = SubbandCurve();
+      for (int j = -1; j <= 1; ++j) near[axis].push_back(first_curves[axis].step[first.index[axis]] * std::exp2(j / 4.0));
+    }
+    extend(near);
+    const StepChoice trial = choose();
+    report_.ms_rate_control += milliseconds_since(begin);
+    const double bytes = double(side_bytes()) + trial.bits / 8;
+    if (trial.distortion <= p_.max_distortion() && bytes < best_bytes) {
+      best_bytes = bytes, best_ratio = ratio;
+      for (int axis = 0; axis < 3; ++axis) best_curves[axis] = curves_[axis];
     }
   }
-  return best;
+  prepare_motion(best_ratio * guess);
+  for (int axis = 0; axis < 3; ++axis) curves_[axis] = best_curves[axis];
+  if (best_ratio == kMotionStepRatio)
+    choice_ = first;  // already refined
+  else
+    residual_rate_control(false);
+  set_residual_steps();
+}
+
+// The motion steps trade side information against prediction quality. They are tied to the residual step: motion step
+// = β × mean residual step. With a rate target, two passes (the second with the first's residual steps) at
+// β = kMotionStepRatio; with an error target, choose_motion_step_ratio.
+// The steps, with the frame references choose_references() proposes (measured by keep_references() after the first
+// rate control, and when they do not pay, the steps chosen again without them, as if they had never been proposed;
+// lossless streams: encode() decides).
+void RateControlDriver::choose_steps() {
+  mean_step_ = p_.mean_step;
+  if (settings_.mode == RateMode::lossless) {
+    prepare_motion(0);
+  } else if (settings_.mode == RateMode::bpvf) {
+    for (int pass = 0; pass < 2; ++pass) {
+      prepare_motion(kMotionStepRatio * mean_step_);
+      residual_rate_control(true);
+      if (references_rejected()) {
+        choose_steps();  // again, without them
+        return;
+      }
+      mean_step_ = (content_.residual_step[0] + content_.residual_step[1] + content_.residual_step[2]) / 3.0;
+    }
+  } else {
+    choose_motion_step_ratio();
+  }
+}
+
+// After the first rate control with proposed references: whether they were measured not to pay (and dropped).
+bool RateControlDriver::references_rejected() {
+  if (!(content_.flags & format::kFlagFrameReferences) || references_checked_) return false;
+  references_checked_ = true;
+  return !keep_references();
+}
+
+// Residual symbols by the decoder's own loop, then the stream; `restored` receives the reconstruction, each frame
+// gathered into the clips' vertex order as it is made.
+void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored) {
+  const bool lossless = settings_.mode == RateMode::lossless;
+  const std::vector<float>& targets = p_.trajectories.positions;
+  const size_t row = p_.welded * 3;
+  // Lossy indices kept in 32 bits (clamped there: the finest step keeps them far inside, kFinestStepBits).
+  std::vector<int64_t>& wide = content_.residuals;
+  std::vector<int32_t>& narrow = content_.narrow_residuals;
+  wide.clear(), narrow.clear();
+  if (lossless)
+    wide.resize(p_.frames_total * row);
+  else
+    narrow.resize(p_.frames_total * row);
+  std::vector<double> predicted(row);
+  std::vector<float> decoded(row);
+  const VertexGather to_vertices(p_.topology.welded_index);
+  double inverse_step[3];
+  for (int axis = 0; axis < 3; ++axis) inverse_step[axis] = 1.0 / double(content_.residual_step[axis]);
+  ResidualReconstructor reconstructor(content_, p_.traversal);
+  size_t frame = 0;
+  for (size_t c = 0; c < content_.clip_frames.size(); ++c) {
+    reconstructor.start_clip();
+    for (uint32_t f = 0; f < content_.clip_frames[c]; ++f, ++frame) {
+      const size_t offset = frame * row;
+      predictions_->predict(frame, predicted.data());
+      reconstructor.frame(
+          frame, predicted.data(),
+          [&](size_t i, double p, double r) -> int64_t {
+            const float x = targets[offset + i];
+            if (lossless) return wide[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
+            const int64_t k = quantizer_index((double(x) - p - r) * inverse_step[i % 3]);
+            return narrow[offset + i] = int32_t(std::clamp<int64_t>(k, INT32_MIN + 1, INT32_MAX));
+          },
+          [&](size_t i, float x) { decoded[i] = x; });
+      to_vertices.gather(decoded.data(), restored[c].frame(f));
+      report_progress(settings_, "coding the residuals", double(frame + 1) / double(p_.frames_total));
+    }
+  }
+  report_progress(settings_, "writing the stream");
+  stream.clear();
+  write_stream(content_, p_.base, stream, &sizes_);
+}
+
+void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored) {
+  const auto start = EncodeClock::now();
+  encode_residuals(stream, restored);
+  if (settings_.mode == RateMode::lossless && (content_.flags & format::kFlagFrameReferences)) {
+    // A lossless stream has no rate control to estimate by: it is written with and without the references, and the
+    // smaller kept (both reconstruct the frames exactly).
+    std::vector<uint8_t> with = stream;
+    const StreamSizes with_sizes = sizes_;
+    drop_references();
+    encode_residuals(stream, restored);
+    if (with.size() < stream.size()) stream = std::move(with), sizes_ = with_sizes;
+  }
+  if (settings_.mode == RateMode::bpvf) {
+    // The rate estimate is an estimate: correct the residual budget by what the coder really produced until the
+    // output lands within 3 % below the target.
+    const double target_bits = settings_.target * double(p_.vertex_count) * double(p_.frames_total);
+    double budget = choice_.bits;
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      const double actual = 8.0 * double(stream.size() + settings_.outside_bytes);
+      if (actual <= target_bits && actual >= kBpvfLandingLow * target_bits) break;
+      const double residual_actual = 8.0 * double(sizes_.residuals);
+      const double residual_target = target_bits - (actual - residual_actual);
+      if (!(residual_target > 0) || !(residual_actual > 0)) break;
+      budget *= residual_target / residual_actual * (actual > target_bits ? 0.995 : 1.0);
+      auto choose_budget = [&] { return steps_for_bits(curves_, budget); };
+      choice_ = choose_budget();
+      refine_steps(choice_, choose_budget);
+      set_residual_steps();
+      encode_residuals(stream, restored);
+    }
+  }
+  report_.ms_entropy = milliseconds_since(start);
+  report_.bytes_motion = sizes_.motion;
+  report_.bytes_residuals = sizes_.residuals;
+  report_.bytes_total = stream.size();
+  for (int axis = 0; axis < 3; ++axis) report_.residual_steps[axis] = content_.residual_step[axis];
 }
 
 }  // namespace
 
-// The Lagrangian choice reaches only the lower convex hull of each subband's (D, R) points, and closed-loop
-// prediction makes the curves non-convex (a dead zone where everything quantizes to 0, then a jump); every
-// combination of measured steps is then tried as well (a few thousand: cheap) and the best feasible one kept.
-template <typename Feasible, typename Better>
-StepChoice exhaustive(const SubbandCurve (&curves)[3], StepChoice best, Feasible feasible, Better better) {
-  StepChoice candidate;
-  for (size_t i = 0; i < curves[0].step.size(); ++i)
-    for (size_t j = 0; j < curves[1].step.size(); ++j)
-      for (size_t k = 0; k < curves[2].step.size(); ++k) {
-        candidate.index[0] = i, candidate.index[1] = j, candidate.index[2] = k;
-        candidate.distortion = curves[0].distortion[i] + curves[1].distortion[j] + curves[2].distortion[k];
-        candidate.bits = curves[0].bits[i] + curves[1].bits[j] + curves[2].bits[k];
-        if (feasible(candidate) && (!feasible(best) || better(candidate, best))) best = candidate;
-      }
-  return best;
-}
-
-StepChoice steps_for_distortion(const SubbandCurve (&curves)[3], double max_distortion) {
-  // Larger λ favours rate: the largest λ whose distortion still fits.
-  auto fits = [&](const StepChoice& c) { return c.distortion <= max_distortion; };
-  const StepChoice lagrangian = bisect(curves, fits, true);
-  return exhaustive(curves, lagrangian, fits, [](const StepChoice& a, const StepChoice& b) { return a.bits < b.bits; });
-}
-
-StepChoice steps_for_bits(const SubbandCurve (&curves)[3], double max_bits) {
-  // Smaller λ favours distortion: the smallest λ whose bits still fit.
-  auto fits = [&](const StepChoice& c) { return c.bits <= max_bits; };
-  const StepChoice lagrangian = bisect(curves, fits, false);
-  return exhaustive(curves, lagrangian, fits,
-                    [](const StepChoice& a, const StepChoice& b) { return a.distortion < b.distortion; });
+void code_stream(const EncodeProblem& problem, const Clusters& clusters, const AffineMotion& fitted,
+                 StreamContent& content, StreamReport& report, std::vector<uint8_t>& stream,
+                 std::vector<FrameSequence>& restored) {
+  RateControlDriver driver(problem, clusters, fitted, content, report);
+  driver.choose_steps();
+  driver.encode(stream, restored);
 }
 
 }  // namespace segmorph

@@ -7,7 +7,7 @@
 //                                            meshes that move rigidly: Draco takes kMovingMeshErrorShare of E
 //   primitive (converter/encoding/           error: the codec is given kErrorTargetMargin × E; kept targets search
 //              baked_primitives, kept_targets) until the animation's KG is in [kCloseEnough, 1] × that
-//   stream (codec/encode/rate_control_driver.cpp)   bpvf: the coded size lands in [kBpvfLandingLow, 1] × its budget
+//   stream (codec/encode/rate_control.cpp)   bpvf: the coded size lands in [kBpvfLandingLow, 1] × its budget
 #pragma once
 
 #include "encode/encoder.h"

@@ -12,7 +12,7 @@
 #include "decode/frame_decoder.h"
 #include "decode/transform_residuals.h"
 #include "encode/metrics.h"
-#include "encode/rate_control.h"
+#include "encode/rate_distortion.h"
 #include "encode/transform_symbols.h"
 
 namespace segmorph {
@@ -350,8 +350,8 @@ bool fit_coefficients(const EncodeProblem& problem, const StreamContent& content
 
 }  // namespace
 
-bool transform_content(const EncodeProblem& problem, StreamContent content, double budget, std::vector<uint8_t>& stream,
-                       StreamSizes& sizes) {
+bool try_transform_stream(const EncodeProblem& problem, StreamContent content, double budget,
+                          std::vector<uint8_t>& stream, StreamSizes& sizes) {
   const size_t welded = content.welded_count, frames = content.frame_count(), clusters = content.cluster_count;
   if (frames > kMaxTransformFrames || !(budget > 0)) return false;
   // What every candidate shares: the content without the residual loop (its symbols are as large as the frames).

@@ -18,9 +18,10 @@ namespace segmorph {
 // dropped), the stream of a version-4 content whose frames have a squared error (over every vertex of every frame,
 // against the problem's clips) of at most `budget`: in `stream` (`sizes`: its parts). The bases and the options
 // are estimated from at most settings.transform_sample_rows rows of each cluster (whole vertices, evenly spaced); every
-// row's coefficients are fitted, and the error is the decoder's frames'. Returns false, leaving the outputs undefined,
-// when there is none (too many frames, vectors or coefficients for the format, or the budget not met).
-bool transform_content(const EncodeProblem& problem, StreamContent content, double budget, std::vector<uint8_t>& stream,
-                       StreamSizes& sizes);
+// row's coefficients are fitted, and the error is the decoder's frames'. Returns whether it made one: false, leaving
+// the outputs undefined, when there is none (too many frames, vectors or coefficients for the format, or the budget
+// not met).
+bool try_transform_stream(const EncodeProblem& problem, StreamContent content, double budget,
+                          std::vector<uint8_t>& stream, StreamSizes& sizes);
 
 }  // namespace segmorph

@@ -1,0 +1,76 @@
+// The version-4 transform coding of the residuals (codec/encode/transform_coding.h): temporal bases and coefficients
+// that meet a squared-error budget, checked on the decoder's frames.
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "common/stream_format.h"
+#include "decode/frame_decoder.h"
+#include "encode/metrics.h"
+#include "encode/motion.h"
+#include "encode/rate_control.h"
+#include "encode/transform_coding.h"
+#include "encode_stage.h"
+
+namespace segmorph {
+namespace {
+
+using namespace testing;
+
+// The residual loop's content and the squared error of its frames, as encode_animation has them before it tries
+// the transform.
+struct LoopStream {
+  StreamContent content;
+  double squared = 0;
+  size_t bytes = 0;
+};
+
+LoopStream residual_loop(StageProblem& stage) {
+  const Clusters clusters = choose_clusters(stage.problem, stage.segmentations, stage.content);
+  const AffineMotion fitted = fit_affine_motion(stage.problem.base_welded.data(), stage.problem.trajectories,
+                                                clusters, 1);
+  stage.content.cluster_count = uint32_t(clusters.count);
+  stage.content.labels = clusters.label;
+  std::vector<FrameSequence> restored = stage.clips;  // the clips' shape
+  std::vector<uint8_t> stream;
+  code_stream(stage.problem, clusters, fitted, stage.content, stage.report, stream, restored);
+  return LoopStream{stage.content, squared_error(stage.clips, restored), stream.size()};
+}
+
+// The stream's frames, decoded, and their squared error.
+double decoded_error(const StageProblem& stage, const std::vector<uint8_t>& stream) {
+  std::vector<FrameSequence> frames;
+  EXPECT_TRUE(decode_animation(stream.data(), stream.size(), stage.base, stage.clips[0].triangles, frames).ok());
+  EXPECT_EQ(frames.size(), stage.clips.size());
+  return frames.size() == stage.clips.size() ? squared_error(stage.clips, frames) : INFINITY;
+}
+
+TEST(TransformCoding, MeetsTheBudgetOnTheDecodersFrames) {
+  StageProblem stage(48, CodecSettings());
+  const LoopStream loop = residual_loop(stage);
+  ASSERT_GT(loop.squared, 0);
+  std::vector<uint8_t> stream;
+  StreamSizes sizes;
+  ASSERT_TRUE(try_transform_stream(stage.problem, loop.content, loop.squared, stream, sizes));
+  ASSERT_GT(stream.size(), 4u);
+  EXPECT_EQ(int(stream[4]), 4);  // the head's version byte (spec/bitstream.md)
+  EXPECT_LE(decoded_error(stage, stream), loop.squared);
+  EXPECT_LE(sizes.motion + sizes.residuals, stream.size());
+
+  // A tighter budget: still met, with more bytes.
+  std::vector<uint8_t> tighter;
+  ASSERT_TRUE(try_transform_stream(stage.problem, loop.content, loop.squared / 16, tighter, sizes));
+  EXPECT_LE(decoded_error(stage, tighter), loop.squared / 16);
+  EXPECT_GT(tighter.size(), stream.size());
+}
+
+TEST(TransformCoding, SaysWhenNoStreamMeetsTheBudget) {
+  StageProblem stage(48, CodecSettings());
+  const LoopStream loop = residual_loop(stage);
+  std::vector<uint8_t> stream;
+  StreamSizes sizes;
+  EXPECT_FALSE(try_transform_stream(stage.problem, loop.content, 0, stream, sizes));
+}
+
+}  // namespace
+}  // namespace segmorph
