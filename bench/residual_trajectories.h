@@ -1,7 +1,7 @@
 // What the trajectory bench tools start from: a file's first animated primitive encoded as codec_sequence
 // --no-transform encodes it (against the stand-in base mesh), and the open-loop residuals of the stream it wrote:
 // each welded vertex's frames minus the prediction of the stream's quantized motion and weights, one trajectory of
-// F values per vertex and axis (needs segmorph_gltf and Eigen).
+// F values per vertex and axis (needs segmorph_pipeline and Eigen).
 #pragma once
 
 #include <Eigen/Dense>

@@ -1,4 +1,4 @@
-// What the codec-level bench tools encode: the first animated node of a glTF file (needs segmorph_gltf).
+// What the codec-level bench tools encode: the first animated node of a glTF file (needs segmorph_pipeline).
 #pragma once
 
 #include "gltf/load.h"
