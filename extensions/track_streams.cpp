@@ -229,7 +229,7 @@ Status coded_layout(const tinygltf::Model& model, const tinygltf::Animation& ani
 
 }  // namespace
 
-Status code_tracks(tinygltf::Model& model, const TrackStep& step_of, TrackReport& report) {
+Status code_track_streams(tinygltf::Model& model, const TrackStep& step_of, TrackReport& report) {
   for (size_t a = 0; a < model.animations.size(); ++a)
     SEGMORPH_RETURN_IF_ERROR(compress_animation(model, a, step_of, report));
   if (report.samplers > 0) declare_extension(model, kExtensionName, true);

@@ -27,7 +27,7 @@ using TrackStep = std::function<double(TrackPath path, int node)>;
 // the extension as required: a viewer without it would play the coded channels from accessors without data, as
 // zeros. Channels that hold their node's rest value to within half their step are removed instead (as gltfpack
 // removes them).
-Status code_tracks(tinygltf::Model& model, const TrackStep& step_of, TrackReport& report);
+Status code_track_streams(tinygltf::Model& model, const TrackStep& step_of, TrackReport& report);
 
 // Decodes every coded animation of `model` back into float accessors; `bytes` and `animations` (when given) receive
 // the size of the streams and how many animations had one. A model without coded animations is left as it is.

@@ -68,7 +68,7 @@ Status compress_tracks(tinygltf::Model& model, const TrackPrecision& precision, 
         return precision.distance / parent_scale(graph, global, node);
     }
   };
-  return code_tracks(model, step_of, report);
+  return code_track_streams(model, step_of, report);
 }
 
 }  // namespace segmorph

@@ -21,7 +21,7 @@ struct TrackPrecision {
 // global transform): the scale TrackPrecision is measured against. 1 when the model has no mesh bounds.
 double scene_diagonal(const tinygltf::Model& model);
 
-// Codes `model`'s tracks (code_tracks) at the steps `precision` gives.
+// Codes `model`'s tracks (code_track_streams) at the steps `precision` gives.
 Status compress_tracks(tinygltf::Model& model, const TrackPrecision& precision, TrackReport& report);
 
 }  // namespace segmorph
