@@ -59,7 +59,7 @@ FrameLoop::FrameLoop(const StreamContent& content, const std::vector<float>& bas
   status_ = transform_coefficients(content, traversal_, coefficients);
   if (!status_.ok()) return;
   transform_ = std::make_unique<TransformResiduals>(content, std::move(coefficients));
-  transform_row_.resize(row_);
+  transform_rows_.resize(2 * row_);
 }
 
 void FrameLoop::start_clip() {
@@ -69,12 +69,16 @@ void FrameLoop::start_clip() {
 Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, size_t count) {
   assert(count == 1 || count == 2);
   if (transform_) {  // version 4: x = float(p + r), r the frame's residual from the coefficients
+    if (count == 2)
+      transform_->two_frames(frame, &transform_rows_[0], &transform_rows_[row_]);
+    else
+      transform_->frame(frame, &transform_rows_[0]);
     for (size_t s = 0; s < count; ++s) {
       const double* p = &predictions_[s * row_];
+      const double* r = &transform_rows_[s * row_];
       predictor_.predict(frame + s, &predictions_[s * row_]);
-      transform_->frame(frame + s, transform_row_.data());
       float* to = &welded_frames_[s * row_];
-      for (size_t i = 0; i < row_; ++i) to[i] = float(p[i] + transform_row_[i]);
+      for (size_t i = 0; i < row_; ++i) to[i] = float(p[i] + r[i]);
       if (!finite(s)) return not_finite();
     }
     return Status::Ok();

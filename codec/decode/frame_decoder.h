@@ -72,7 +72,7 @@ class FrameLoop {
   VertexGather to_vertices_;  // welded frames into the base mesh's vertex order
   // Version 4: the residuals from the coefficients instead of the residual loop (no symbols are read).
   std::unique_ptr<TransformResiduals> transform_;
-  std::vector<double> transform_row_;
+  std::vector<double> transform_rows_;  // slot 0 and slot 1's residuals
   Status status_;
 };
 

@@ -43,6 +43,10 @@ class TransformResiduals {
   // products computed once, the same doubles).
   void frame(size_t frame, double* out) const;
 
+  // Frames `frame` and `frame` + 1 at once, into first and second (W × 3 each): the same sums as frame() gives each,
+  // in the same order, from one pass over the coefficients (which a rich stream reads more of than anything else).
+  void two_frames(size_t frame, double* first, double* second) const;
+
   // What frame() reads. Vertex w's scaled coefficients are scaled()[offsets()[w] + a × m + i] (axis a, vector i);
   // the stream's basis value of vector i in frame f is stream_values()[f × G + i] (G its vectors), cluster k's own
   // (kBasisOwn) own_values(k)[f × m + i].
