@@ -20,10 +20,6 @@ bool is_obj_sequence(const std::string& path) {
   return path.find('%') != std::string::npos && !has_gltf_extension(path);
 }
 
-void report(const Progress& progress, const std::string& message) {
-  if (progress) progress(message);
-}
-
 }  // namespace
 
 InputKind input_kind(const Input& input) {
@@ -42,10 +38,10 @@ Status load_input(const Input& input, const SampleSettings& requested, Model& mo
       if (input.caches && (has_suffix(input.path, ".pc2") || has_suffix(input.path, ".mdd")))
         return Status(StatusCode::invalid_argument, "a point cache moves a base mesh: give the mesh (.obj, .glb or "
                                                     ".gltf) as the input and the cache with --cache");
-      report(progress, "reading " + (input.path == "-" ? std::string("the standard input") : input.path));
+      report_progress(progress, "reading " + (input.path == "-" ? std::string("the standard input") : input.path));
       std::vector<std::string> warnings;
       SEGMORPH_RETURN_IF_ERROR(Model::load(input.path, model, &warnings));
-      for (const std::string& warning : warnings) report(progress, "warning: " + input.path + ": " + warning);
+      for (const std::string& warning : warnings) report_progress(progress, "warning: " + input.path + ": " + warning);
       return Status::Ok();
     }
     CacheSource source;
@@ -59,7 +55,7 @@ Status load_input(const Input& input, const SampleSettings& requested, Model& mo
     char line[256];
     std::snprintf(line, sizeof(line), "%s: %zu frames of %zu points (%zu glTF vertices), %.4g s to %.4g s",
                   read.format.c_str(), read.frames, read.points, read.vertices, read.first_time, read.last_time);
-    report(progress, line);
+    report_progress(progress, line);
     if (!(read.own_times && requested.fps > 0)) sampling = read.sampling;
     return Status::Ok();
   });

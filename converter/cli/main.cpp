@@ -66,14 +66,18 @@ Status load(size_t index, const CommandLine& options, Model& model, SampleSettin
   return load_input(input(index, options), options.sampling, model, sampling, progress_of(options));
 }
 
-// A usage error (exit 2) when the command's output would replace its input or a file it reads (unless --force) or
-// a binary file would go to a terminal; 0 otherwise.
-int refuse_output(const CommandLine& options, const Model* input) {
+// A binary file is not written to a terminal: a usage error (exit 2); otherwise 0.
+int refuse_terminal_output(const CommandLine& options) {
   if ((options.output == "-" || options.frames == "-") && isatty(STDOUT_FILENO))
     return usage_error(options.json, "the standard output is a terminal: redirect it, or give -o FILE");
-  if (!input || options.force || options.inputs[0] == "-") return 0;
+  return 0;
+}
+
+// bake, encode and decode do not write over their own input (or a file it reads) unless --force: a usage error.
+int refuse_replacing_input(const CommandLine& options, const Model& input) {
+  if (options.force || options.inputs[0] == "-") return 0;
   for (const std::string* output : {&options.output, &options.frames})
-    if (!output->empty() && *output != "-" && writes_over(*output, options.inputs[0], *input))
+    if (!output->empty() && *output != "-" && writes_over(*output, options.inputs[0], input))
       return usage_error(options.json, *output + " would replace the input " + options.inputs[0] +
                                            " or a file it reads; give --force to replace it");
   return 0;
@@ -102,10 +106,10 @@ int run_bake(const CommandLine& options) {
   Model model;
   BakeReport report;
   SampleSettings sampling;
-  if (const int refused = refuse_output(options, nullptr)) return refused;
+  if (const int refused = refuse_terminal_output(options)) return refused;
   Status status = load(0, options, model, sampling);
   if (status.ok())
-    if (const int refused = refuse_output(options, &model)) return refused;
+    if (const int refused = refuse_replacing_input(options, model)) return refused;
   if (status.ok()) status = bake(model, sampling, &report, progress_of(options));
   if (!status.ok()) return fail(options, options.inputs[0], status);
   if (const int failed = save(options, model)) return failed;
@@ -118,10 +122,10 @@ int run_encode(const CommandLine& options) {
   Model input, output;
   EncodeReport report;
   EncodeSettings settings = options.encode;
-  if (const int refused = refuse_output(options, nullptr)) return refused;
+  if (const int refused = refuse_terminal_output(options)) return refused;
   Status status = load(0, options, input, settings.sampling);
   if (status.ok())
-    if (const int refused = refuse_output(options, &input)) return refused;
+    if (const int refused = refuse_replacing_input(options, input)) return refused;
   if (status.ok()) status = encode(std::move(input), settings, output, &report, progress_of(options));
   if (!status.ok()) return fail(options, options.inputs[0], status);
   if (const int failed = save(options, output)) return failed;
@@ -138,10 +142,10 @@ int run_decode(const CommandLine& options) {
   DecodeReport report;
   std::vector<DecodedFrames> decoded;
   SampleSettings sampling;
-  if (const int refused = refuse_output(options, nullptr)) return refused;
+  if (const int refused = refuse_terminal_output(options)) return refused;
   Status status = load(0, options, model, sampling);
   if (status.ok())
-    if (const int refused = refuse_output(options, &model)) return refused;
+    if (const int refused = refuse_replacing_input(options, model)) return refused;
   if (status.ok()) status = decode(model, &report, options.frames.empty() ? nullptr : &decoded);
   if (!status.ok()) return fail(options, path, status);
   if (report.primitives == 0 && report.coded_animations == 0)
