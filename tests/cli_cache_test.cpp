@@ -1,6 +1,8 @@
 // Vertex caches on the command line (tests/vertex_cache_test.cpp reads them through the library).
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "cli_run.h"
 
 using namespace cli_testing;

@@ -1,7 +1,9 @@
 // segmorph decode: round trips through encode and decode, --frames, and damaged encoded files.
 #include <gtest/gtest.h>
 
+#include "accessor.h"
 #include "cli_run.h"
+#include "gltf/load.h"
 
 using namespace cli_testing;
 

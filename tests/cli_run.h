@@ -3,7 +3,6 @@
 #pragma once
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -17,8 +16,6 @@
 #include <regex>
 #include <sstream>
 
-#include "accessor.h"
-#include "gltf/load.h"
 #include "test_files.h"
 
 namespace cli_testing {

@@ -1,6 +1,7 @@
 // The command-line tool as a user meets it, whatever the command: help and usage errors, options, errors in
 // one line (and one JSON object), outputs written whole or not at all, signals, the standard input and output.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "cli_run.h"
 
