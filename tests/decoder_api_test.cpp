@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/stream_format.h"
 #include "common/track_set.h"
 #include "decode/frame_decoder.h"
 #include "decode/track_decoder.h"
@@ -37,11 +38,13 @@ std::vector<Case> cases() {
     RateMode mode;
     bool table;
     std::vector<size_t> frames;
+    bool version_4 = false;  // the GPU-playable model (a version-4 stream whatever its size)
   };
   const Kind kinds[] = {{"lossy, one clip", RateMode::error, false, {9}},
                         {"lossy, three clips", RateMode::error, false, {5, 1, 8}},
                         {"table code, three clips", RateMode::error, true, {4, 7, 3}},
-                        {"lossless, two clips", RateMode::lossless, false, {6, 3}}};
+                        {"lossless, two clips", RateMode::lossless, false, {6, 3}},
+                        {"version 4, four clips", RateMode::error, false, {17, 1, 8, 10}, true}};
   std::vector<Case> out;
   for (const Kind& kind : kinds) {
     Case c;
@@ -53,7 +56,11 @@ std::vector<Case> cases() {
     settings.mode = kind.mode;
     settings.target = 0.3;
     settings.table_residuals = kind.table;
+    settings.gpu_playable = kind.version_4;
     c.stream = testing::encode(c.clips, c.base, settings).stream;
+    if (kind.version_4) {
+      EXPECT_EQ(c.stream[4], format::kTransformVersion) << kind.name;
+    }
     out.push_back(std::move(c));
   }
   return out;

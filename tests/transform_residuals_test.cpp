@@ -5,11 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
+#include <random>
 
 #include "common/stream.h"
 #include "common/stream_format.h"
 #include "decode/frame_decoder.h"
 #include "decode/stream_reader.h"
+#include "decode/transform_blocks.h"
+#include "decode/transform_walk.h"
 #include "encode/encoder.h"
 #include "encode/stream_writer.h"
 #include "encode/transform_symbols.h"
@@ -74,27 +78,78 @@ TEST(TransformResiduals, FewerBytesAtNoMoreErrorAndTheDecodersFramesAreTheEncode
   }
 }
 
-// Every way of decoding gives the same floats: one or two frames at a time, and after seeking back and forth.
-TEST(TransformResiduals, OneOrTwoFramesAtATimeAndAfterASeekAreTheEncodersFrames) {
+// Every way of decoding gives the same floats: any number of frames at a time up to the block, and after seeking back
+// and forth.
+TEST(TransformResiduals, AnyFramesAtATimeAndAfterASeekAreTheEncodersFrames) {
   const std::vector<FrameSequence> clips = two_clips();
   const std::vector<float> base = quantized_base(clips[0]);
   const Encoded encoded = encode(clips, base, error(0.15));
   ASSERT_EQ(encoded.stream[4], format::kTransformVersion);
-  for (bool two : {false, true}) {
-    SCOPED_TRACE(two ? "two at a time" : "one at a time");
+  for (size_t step : {size_t(1), size_t(2), size_t(3), TransformBlocks::kMaxFrames}) {
+    SCOPED_TRACE(step);
     FrameDecoder decoder;
     ASSERT_TRUE(decoder.open(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles).ok());
+    EXPECT_EQ(decoder.block_frames(), TransformBlocks::kMaxFrames);
     ASSERT_TRUE(decoder.seek(1).ok());
     for (int pass = 0; pass < 2; ++pass) {
       for (size_t c = pass == 0 ? 1 : 0; c < clips.size(); ++c) {
         std::vector<float> frames;
         while (decoder.next_clip() == c)
-          ASSERT_TRUE(decoder.decode_append(two && decoder.frames_left_in_clip() >= 2 ? 2 : 1, frames).ok());
+          ASSERT_TRUE(decoder.decode_append(std::min(step, decoder.frames_left_in_clip()), frames).ok());
         EXPECT_EQ(frames, encoded.reconstruction[c].positions) << "clip " << c << ", pass " << pass;
       }
       ASSERT_TRUE(decoder.seek(0).ok());
     }
   }
+}
+
+// The frame loop's blocks (transform_blocks.h), with every instruction set the processor has, against the reference
+// one frame at a time: the prediction of FramePredictor (spec 8.5) plus TransformResiduals::frame, as floats, bit for
+// bit, for every first frame and block length, on streams with bases of the stream's, the clusters' own and none.
+TEST(TransformResiduals, BlocksOfFramesAreTheReferenceFrames) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  size_t sources[3] = {0, 0, 0};
+  for (double target : {0.05, 0.15, 0.5, 2.0}) {
+    SCOPED_TRACE(target);
+    const Encoded encoded = encode(clips, base, error(target));
+    ASSERT_EQ(encoded.stream[4], format::kTransformVersion);
+    StreamContent content;
+    ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+    for (uint8_t source : content.basis_source) ++sources[std::min<size_t>(source, 2)];
+    const std::vector<float> welded = welded_base(base, content);
+    const AffineMotion motion = dequantized_motion(content, welded);
+    const ClusterWeights weights = dequantized_weights(content);
+    TransformCoefficients coefficients;
+    ASSERT_TRUE(transform_coefficients(content, residual_traversal(content, clips[0].triangles), coefficients).ok());
+    const TransformResiduals residuals(content, std::move(coefficients));
+    const size_t frames = content.frame_count(), row = size_t(content.welded_count) * 3;
+    std::vector<float> reference(frames * row);
+    std::vector<double> predicted(row), r(row);
+    for (size_t f = 0; f < frames; ++f) {
+      predict_frame(welded.data(), motion, weights, f, predicted.data());
+      residuals.frame(f, r.data());
+      for (size_t i = 0; i < row; ++i) reference[f * row + i] = float(predicted[i] + r[i]);
+    }
+    using Instructions = TransformBlocks::Instructions;
+    for (Instructions instructions : {Instructions::baseline, Instructions::avx, Instructions::avx512}) {
+      const TransformBlocks blocks(content, residuals, welded.data(), motion, weights, instructions);
+      if (blocks.instructions() != instructions) continue;  // the processor has not got them
+      SCOPED_TRACE(int(instructions));
+      std::vector<float> out(TransformBlocks::kMaxFrames * row);
+      for (size_t count = 1; count <= TransformBlocks::kMaxFrames; ++count)
+        for (size_t first = 0; first + count <= frames; ++first) {
+          std::fill(out.begin(), out.end(), -1.0f);
+          blocks.reconstruct(first, count, out.data());
+          ASSERT_EQ(std::memcmp(out.data(), &reference[first * row], count * row * sizeof(float)), 0)
+              << "frames " << first << " + " << count;
+          ASSERT_TRUE(std::all_of(out.begin() + ptrdiff_t(count * row), out.end(), [](float x) { return x == -1.0f; }))
+              << "written past " << count << " frames";
+        }
+    }
+  }
+  EXPECT_GT(sources[format::kBasisStream], 0u);
+  EXPECT_GT(sources[format::kBasisOwn], 0u);
 }
 
 // With the bases and options estimated from a sample of each cluster's rows (as on large meshes), the transform is
@@ -119,6 +174,25 @@ TEST(TransformResiduals, ASampleOfTheRowsChoosesAsWell) {
   none.transform_sample_rows = 2;  // less than a vertex
   std::vector<uint8_t> stream;
   EXPECT_EQ(encode_animation(clips, base, none, stream).code(), StatusCode::invalid_argument);
+}
+
+// The walk's mean by a multiplication is the mean by division, for every count a vertex can have neighbours and sums
+// around the multiplication's limit (dividends of 32 bits) and far beyond it.
+TEST(TransformResiduals, MeansByMultiplicationAreMeansByDivision) {
+  using transform_code::reciprocal;
+  using transform_code::rounded_mean;
+  std::mt19937_64 random(35);
+  for (int64_t count = 1; count <= 64; ++count) {
+    const uint64_t magic = reciprocal(count);
+    std::vector<int64_t> sums = {0, 1, -1, count, -count, count / 2, -(count / 2), (count + 1) / 2, -((count + 1) / 2)};
+    for (int64_t edge : {(int64_t(1) << 31) - count / 2, int64_t(1) << 31, int64_t(1) << 32, int64_t(1) << 36})
+      for (int64_t d = -3; d <= 3; ++d) sums.push_back(edge + d), sums.push_back(-(edge + d));
+    for (int i = 0; i < 2000; ++i) {
+      sums.push_back(int64_t(random() % (uint64_t(1) << 31)) - (int64_t(1) << 30));
+      sums.push_back(int64_t(random() % (uint64_t(count) << 31)) - (count << 30));  // count coefficients of ±2^30
+    }
+    for (int64_t sum : sums) ASSERT_EQ(rounded_mean(sum, count, magic), rounded_mean(sum, count)) << sum << " / " << count;
+  }
 }
 
 // The coefficients' symbols and the coefficients are each other's inverse through the traversal's prediction.

@@ -335,7 +335,8 @@ Status code_transform(Coder& coder, Models& models, StreamContent& content) {
       SignedModel& model = models.coefficient[std::min<size_t>(i, format::kCoefficientModels - 1)];
       for (int axis = 0; axis < 3; ++axis) {
         coder.grow(content.coefficient_symbols, at + members[k].size());
-        for (size_t j = 0; j < members[k].size(); ++j) coder.integer(model, content.coefficient_symbols[at++]);
+        coder.integers(model, &content.coefficient_symbols[at], members[k].size());
+        at += members[k].size();
         if (coder.failed()) return coder.status();
       }
     }

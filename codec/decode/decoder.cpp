@@ -45,21 +45,22 @@ FrameLoop::FrameLoop(const StreamContent& content, const std::vector<float>& bas
       motion_(dequantized_motion(content, welded_)),
       weights_(dequantized_weights(content)),
       traversal_(residual_traversal(content, triangles)),
-      predictor_(welded_.data(), motion_, weights_),
       row_(size_t(content.welded_count) * 3),
-      predictions_(2 * row_),
-      welded_frames_(2 * row_),
       to_vertices_(content.welded_index) {
   if (!content.transform) {
+    predictor_ = std::make_unique<FramePredictor>(welded_.data(), motion_, weights_);
     reconstructor_ = std::make_unique<ResidualReconstructor>(content, traversal_);
+    predictions_.resize(2 * row_);
     symbols_.resize(2 * row_);
+    welded_frames_.resize(2 * row_);
     return;
   }
   TransformCoefficients coefficients;
   status_ = transform_coefficients(content, traversal_, coefficients);
   if (!status_.ok()) return;
   transform_ = std::make_unique<TransformResiduals>(content, std::move(coefficients));
-  transform_rows_.resize(2 * row_);
+  blocks_ = std::make_unique<TransformBlocks>(content, *transform_, welded_.data(), motion_, weights_);
+  welded_frames_.resize(TransformBlocks::kMaxFrames * row_);
 }
 
 void FrameLoop::start_clip() {
@@ -67,24 +68,13 @@ void FrameLoop::start_clip() {
 }
 
 Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, size_t count) {
-  assert(count == 1 || count == 2);
-  if (transform_) {  // version 4: x = float(p + r), r the frame's residual from the coefficients
-    if (count == 2)
-      transform_->two_frames(frame, &transform_rows_[0], &transform_rows_[row_]);
-    else
-      transform_->frame(frame, &transform_rows_[0]);
-    for (size_t s = 0; s < count; ++s) {
-      const double* p = &predictions_[s * row_];
-      const double* r = &transform_rows_[s * row_];
-      predictor_.predict(frame + s, &predictions_[s * row_]);
-      float* to = &welded_frames_[s * row_];
-      for (size_t i = 0; i < row_; ++i) to[i] = float(p[i] + r[i]);
-      if (!finite(s)) return not_finite();
-    }
-    return Status::Ok();
+  assert(count >= 1 && count <= block_frames());
+  if (blocks_) {  // version 4: x = float(p + r), r the frame's residual from the coefficients
+    blocks_->reconstruct(frame, count, welded_frames_.data());
+    return all_finite(welded_frames_.data(), count * row_) ? Status::Ok() : not_finite();
   }
   for (size_t s = 0; s < count; ++s) {
-    predictor_.predict(frame + s, &predictions_[s * row_]);
+    predictor_->predict(frame + s, &predictions_[s * row_]);
     SEGMORPH_RETURN_IF_ERROR(residuals(frame + s, &symbols_[s * row_]));
   }
   auto symbol = [&](size_t s) {
@@ -100,24 +90,19 @@ Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, size_t c
                                output(1));
   else
     reconstructor_->frame(frame, &predictions_[0], symbol(0), output(0));
-  for (size_t s = 0; s < count; ++s)
-    if (!finite(s)) return not_finite();
-  return Status::Ok();
+  return all_finite(welded_frames_.data(), count * row_) ? Status::Ok() : not_finite();
 }
 
-bool FrameLoop::finite(size_t slot) const { return all_finite(&welded_frames_[slot * row_], row_); }
-
-Status FrameLoop::decode(size_t frame, const Residuals& residuals, float* first, float* second) {
-  SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, second ? 2 : 1));
-  to_vertices_.gather(&welded_frames_[0], first);
-  if (second) to_vertices_.gather(&welded_frames_[row_], second);
+Status FrameLoop::decode(size_t frame, const Residuals& residuals, size_t count, float* out) {
+  SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, count));
+  const size_t floats = to_vertices_.vertex_count() * 3;
+  for (size_t s = 0; s < count; ++s) to_vertices_.gather(&welded_frames_[s * row_], out + s * floats);
   return Status::Ok();
 }
 
 Status FrameLoop::decode_append(size_t frame, const Residuals& residuals, size_t count, std::vector<float>& out) {
   SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, count));
-  to_vertices_.append(&welded_frames_[0], out);
-  if (count == 2) to_vertices_.append(&welded_frames_[row_], out);
+  for (size_t s = 0; s < count; ++s) to_vertices_.append(&welded_frames_[s * row_], out);
   return Status::Ok();
 }
 
@@ -184,7 +169,12 @@ Status FrameDecoder::before_decode(size_t count) {
   if (!failure_.ok()) return failure_;
   const size_t left = frames_left_in_clip();
   if (left == 0) return Status(StatusCode::invalid_argument, "the stream has no frame left to decode");
-  if (count > left) return Status(StatusCode::invalid_argument, "two frames asked for where the clip has one left");
+  if (count > left)
+    return Status(StatusCode::invalid_argument, std::to_string(count) + " frames asked for where the clip has " +
+                                                    std::to_string(left) + " left");
+  if (count == 0 || count > loop_->block_frames())
+    return Status(StatusCode::invalid_argument, "frames are decoded 1 to " + std::to_string(loop_->block_frames()) +
+                                                    " at a time, not " + std::to_string(count));
   return Status::Ok();
 }
 
@@ -209,9 +199,9 @@ Status FrameDecoder::after_decode(Status status, size_t count) {
   return status;
 }
 
-Status FrameDecoder::decode(float* first, float* second) {
-  SEGMORPH_RETURN_IF_ERROR(before_decode(second ? 2 : 1));
-  return after_decode(loop_->decode(frame_, residuals_, first, second), second ? 2 : 1);
+Status FrameDecoder::decode(size_t count, float* out) {
+  SEGMORPH_RETURN_IF_ERROR(before_decode(count));
+  return after_decode(loop_->decode(frame_, residuals_, count, out), count);
 }
 
 Status FrameDecoder::decode_append(size_t count, std::vector<float>& out) {
@@ -220,10 +210,9 @@ Status FrameDecoder::decode_append(size_t count, std::vector<float>& out) {
 }
 
 Status FrameDecoder::skip_frame() {
-  scratch_.resize(size_t(content_.vertex_count) * 3);
-  const bool two = frames_left_in_clip() >= 2;
-  if (two) scratch_.resize(scratch_.size() * 2);
-  return decode(scratch_.data(), two ? scratch_.data() + size_t(content_.vertex_count) * 3 : nullptr);
+  const size_t count = std::min(frames_left_in_clip(), block_frames());
+  scratch_.resize(count * content_.vertex_count * 3);
+  return decode(count, scratch_.data());
 }
 
 Status FrameDecoder::seek(size_t clip) {
@@ -254,10 +243,10 @@ Status FrameDecoder::seek(size_t clip) {
 namespace {
 
 // `clips` filled with the clips of `content`: at each clip's start begin_clip(clip, frame) returns how many floats to
-// reserve, then its frames are appended two at a time (one at a clip's odd end) by append(frame, count, positions);
+// reserve, then its frames are appended `block` at a time (fewer at a clip's end) by append(frame, count, positions);
 // frame counts the stream's frames.
 template <typename BeginClip, typename Append>
-Status collect_clips(const StreamContent& content, BeginClip begin_clip, Append append,
+Status collect_clips(const StreamContent& content, size_t block, BeginClip begin_clip, Append append,
                      std::vector<FrameSequence>& clips) {
   clips.assign(content.clip_frames.size(), FrameSequence());
   size_t frame = 0;
@@ -267,7 +256,7 @@ Status collect_clips(const StreamContent& content, BeginClip begin_clip, Append 
     clip.frame_count = content.clip_frames[c];
     clip.positions.reserve(begin_clip(c, frame));
     for (size_t f = 0; f < clip.frame_count;) {
-      const size_t count = std::min<size_t>(clip.frame_count - f, 2);
+      const size_t count = std::min<size_t>(clip.frame_count - f, block);
       SEGMORPH_RETURN_IF_ERROR(append(frame, count, clip.positions));
       f += count, frame += count;
     }
@@ -295,7 +284,7 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
   auto append = [&](size_t frame, size_t count, std::vector<float>& positions) {
     return loop.decode_append(frame, copy, count, positions);
   };
-  return collect_clips(content, begin_clip, append, clips);
+  return collect_clips(content, loop.block_frames(), begin_clip, append, clips);
 }
 
 Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
@@ -316,7 +305,7 @@ Status decode_animation(const uint8_t* data, size_t size, const std::vector<floa
   auto append = [&](size_t, size_t count, std::vector<float>& positions) {
     return decoder.decode_append(count, positions);
   };
-  return collect_clips(content, begin_clip, append, clips);
+  return collect_clips(content, decoder.block_frames(), begin_clip, append, clips);
 }
 
 }  // namespace segmorph

@@ -83,11 +83,13 @@ struct AnimationDecoder::State {
   std::vector<float> base;
   std::vector<uint32_t> triangles;
   FrameDecoder decoder;
-  // decode_frame decodes two frames at a time (the frame loop's fast path) and keeps the second here for the next
-  // call: `pending` says whether it holds one, and which frame it is.
+  // decode_frame decodes a block of frames at a time (the frame loop's fast path: two in versions 1 to 3, up to
+  // TransformBlocks::kMaxFrames in version 4) and keeps those after the first here for the next calls:
+  // pending_count of them, frame pending_frame of clip pending_clip the next, at pending[pending_next × V × 3].
   std::vector<float> pending;
-  bool has_pending = false;
+  size_t pending_count = 0, pending_next = 0;
   size_t pending_clip = 0, pending_frame = 0;
+  bool has_pending() const { return pending_count > 0; }
   // The version-4 model in float32, made when first asked for.
   std::unique_ptr<PlaybackModel> model;
   // The surface normals turn on, made when first asked for: the stream's welding and the base surface's normals.
@@ -150,12 +152,12 @@ size_t AnimationDecoder::clip_floats(size_t clip) const { return frame_count(cli
 
 size_t AnimationDecoder::next_clip() const {
   if (!state_) return 0;
-  return state_->has_pending ? state_->pending_clip : state_->decoder.next_clip();
+  return state_->has_pending() ? state_->pending_clip : state_->decoder.next_clip();
 }
 
 size_t AnimationDecoder::next_frame() const {
   if (!state_) return 0;
-  return state_->has_pending ? state_->pending_frame : state_->decoder.next_frame();
+  return state_->has_pending() ? state_->pending_frame : state_->decoder.next_frame();
 }
 
 Status AnimationDecoder::seek(size_t clip) {
@@ -163,8 +165,8 @@ Status AnimationDecoder::seek(size_t clip) {
   if (clip >= clip_count())
     return invalid("no clip " + std::to_string(clip) + " (the stream has " + std::to_string(clip_count()) + ")");
   State& state = *state_;
-  if (state.has_pending && state.pending_clip == clip && state.pending_frame == 0) return Status::Ok();
-  state.has_pending = false;
+  if (state.has_pending() && state.pending_clip == clip && state.pending_frame == 0) return Status::Ok();
+  state.pending_count = 0;
   return guarded([&] { return state.decoder.seek(clip); });
 }
 
@@ -176,13 +178,12 @@ Status AnimationDecoder::decode_clip(size_t clip, float* destination, size_t des
     return invalid("the destination holds " + std::to_string(destination_floats) + " floats, the clip needs " +
                    std::to_string(floats));
   State& state = *state_;
-  state.has_pending = false;
+  state.pending_count = 0;
   return guarded([&] {
     for (size_t f = 0, frames = frame_count(clip); f < frames;) {
-      float* first = destination + f * frame_floats;
-      const bool two = frames - f >= 2;
-      SEGMORPH_RETURN_IF_ERROR(state.decoder.decode(first, two ? first + frame_floats : nullptr));
-      f += two ? 2 : 1;
+      const size_t count = std::min(frames - f, state.decoder.block_frames());
+      SEGMORPH_RETURN_IF_ERROR(state.decoder.decode(count, destination + f * frame_floats));
+      f += count;
     }
     return Status::Ok();
   });
@@ -211,20 +212,22 @@ Status AnimationDecoder::decode_frame(float* destination, size_t destination_flo
     return invalid("the destination holds " + std::to_string(destination_floats) + " floats, a frame needs " +
                    std::to_string(frame_floats));
   State& state = *state_;
-  if (state.has_pending) {
-    std::memcpy(destination, state.pending.data(), frame_floats * sizeof(float));
-    state.has_pending = false;
+  if (state.has_pending()) {
+    std::memcpy(destination, &state.pending[state.pending_next * frame_floats], frame_floats * sizeof(float));
+    ++state.pending_next, ++state.pending_frame, --state.pending_count;
     return Status::Ok();
   }
   FrameDecoder& decoder = state.decoder;
   if (decoder.next_clip() >= clip_count())
     return invalid("every frame of the stream is decoded (seek to a clip to decode again)");
   return guarded([&] {
-    if (decoder.frames_left_in_clip() < 2) return decoder.decode(destination, nullptr);
-    state.pending.resize(frame_floats);
+    const size_t count = std::min(decoder.frames_left_in_clip(), decoder.block_frames());
+    if (count == 1) return decoder.decode(1, destination);
+    state.pending.resize(count * frame_floats);
     const size_t clip = decoder.next_clip(), frame = decoder.next_frame() + 1;
-    SEGMORPH_RETURN_IF_ERROR(decoder.decode(destination, state.pending.data()));
-    state.has_pending = true;
+    SEGMORPH_RETURN_IF_ERROR(decoder.decode(count, state.pending.data()));
+    std::memcpy(destination, state.pending.data(), frame_floats * sizeof(float));
+    state.pending_count = count - 1, state.pending_next = 1;
     state.pending_clip = clip, state.pending_frame = frame;
     return Status::Ok();
   });

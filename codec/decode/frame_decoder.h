@@ -1,5 +1,5 @@
-// The decoder's one frame loop: a stream's frames reconstructed one or two at a time and written in the base mesh's
-// vertex order. decode_animation, reconstruct_clips and the runtime API (include/segmorph/decoder.h) all decode
+// The decoder's one frame loop: a stream's frames reconstructed a few at a time (two in versions 1 to 3, up to
+// TransformBlocks::kMaxFrames in version 4) and written in the base mesh's vertex order. decode_animation, reconstruct_clips and the runtime API (include/segmorph/decoder.h) all decode
 // through it, so that every way of decoding gives the same floats.
 #pragma once
 
@@ -14,6 +14,7 @@
 #include "common/stream.h"
 #include "common/vertex_gather.h"
 #include "decode/stream_reader.h"
+#include "decode/transform_blocks.h"
 #include "decode/transform_residuals.h"
 #include "segmorph/status.h"
 
@@ -44,35 +45,38 @@ class FrameLoop {
   // Starts a clip: its first frame has no reference.
   void start_clip();
 
-  // Reconstructs stream frame `frame` into first (V × 3 floats) and, when `second` is not null, frame + 1 (of the
-  // same clip) into second. Fails on bad symbols and on a position that decodes to NaN or infinity.
-  Status decode(size_t frame, const Residuals& residuals, float* first, float* second);
+  // How many frames one call decodes at most: 2 in versions 1 to 3, TransformBlocks::kMaxFrames in version 4.
+  size_t block_frames() const { return blocks_ ? TransformBlocks::kMaxFrames : 2; }
 
-  // The same for `count` frames (1 or 2), appending their V × 3 floats to `out` (which grows without being
-  // zero-filled first).
+  // Reconstructs stream frames `frame` .. `frame` + count − 1 (count 1 .. block_frames(); in versions 1 to 3 all in
+  // one clip, in version 4 any, its frames depending on no other) into out,
+  // frame after frame (V × 3 floats each). Fails on bad symbols and on a position that decodes to NaN or infinity.
+  Status decode(size_t frame, const Residuals& residuals, size_t count, float* out);
+
+  // The same, appending the frames' floats to `out` (which grows without being zero-filled first).
   Status decode_append(size_t frame, const Residuals& residuals, size_t count, std::vector<float>& out);
 
  private:
-  Status reconstruct(size_t frame, const Residuals& residuals, size_t count);  // 1 or 2 frames
-  bool finite(size_t slot) const;
+  Status reconstruct(size_t frame, const Residuals& residuals, size_t count);
 
   const StreamContent& content_;
   std::vector<float> welded_;
   AffineMotion motion_;
   ClusterWeights weights_;
   ResidualTraversal traversal_;
+  std::unique_ptr<FramePredictor> predictor_;              // versions 1 to 3 (null in version 4)
   std::unique_ptr<ResidualReconstructor> reconstructor_;  // versions 1 to 3 (null in version 4)
-  FramePredictor predictor_;
   size_t row_;  // W × 3
-  // Two frames at a time (ResidualReconstructor::two_frames), so that what the loop reads in traversal order
-  // (predictions, symbols) and writes (welded positions) stays in cache: slot 0 and slot 1.
+  // Versions 1 to 3 reconstruct two frames at a time (ResidualReconstructor::two_frames), so that what the loop reads
+  // in traversal order (predictions, symbols) and writes (welded positions) stays in cache: slot 0 and slot 1.
   std::vector<double> predictions_;
-  std::vector<int64_t> symbols_;  // versions 1 to 3
-  std::vector<float> welded_frames_;
+  std::vector<int64_t> symbols_;
+  std::vector<float> welded_frames_;  // block_frames() slots of W × 3
   VertexGather to_vertices_;  // welded frames into the base mesh's vertex order
-  // Version 4: the residuals from the coefficients instead of the residual loop (no symbols are read).
+  // Version 4: the residuals from the coefficients instead of the residual loop (no symbols are read), the frames
+  // a block at a time.
   std::unique_ptr<TransformResiduals> transform_;
-  std::vector<double> transform_rows_;  // slot 0 and slot 1's residuals
+  std::unique_ptr<TransformBlocks> blocks_;
   Status status_;
 };
 
@@ -101,10 +105,13 @@ class FrameDecoder {
   size_t next_frame() const { return frame_in_clip_; }
   size_t frames_left_in_clip() const;
 
-  // Decodes the next frame into first (V × 3) and, when second is not null, the one after it, which must be in the
-  // same clip; advances. The last frame of the stream also checks that the stream ends there.
-  Status decode(float* first, float* second);
-  // The same for `count` frames (1, or 2 within the clip), appending to `out`.
+  // How many frames one call decodes at most (FrameLoop::block_frames()).
+  size_t block_frames() const { return loop_->block_frames(); }
+
+  // Decodes the next `count` frames (1 .. block_frames(), within the clip) into out, frame after frame (V × 3 floats
+  // each); advances. The last frame of the stream also checks that the stream ends there.
+  Status decode(size_t count, float* out);
+  // The same, appending to `out`.
   Status decode_append(size_t count, std::vector<float>& out);
 
   // Positions the decoder at the first frame of `clip` (< the clip count). Versions 1 to 3: a clip start the decoder

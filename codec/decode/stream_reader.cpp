@@ -26,6 +26,7 @@ struct HeadReader {
   void bit(BitModel& model, uint32_t& value) { value = coder.decode_bit(model); }
   void tree(BitTreeModel& model, uint32_t& value) { value = model.decode(coder); }
   void integer(SignedModel& model, int32_t& value) { value = model.decode(coder); }
+  void integers(SignedModel& model, int32_t* values, size_t count) { model.decode_run(coder, values, count); }
   void float_bits(float& value) { value = bits_float(coder.decode_direct_bits(32)); }
   template <typename T>
   void grow(std::vector<T>& values, size_t size) {

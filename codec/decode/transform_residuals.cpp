@@ -77,34 +77,4 @@ void TransformResiduals::frame(size_t frame, double* out) const {
   }
 }
 
-void TransformResiduals::two_frames(size_t frame, double* first, double* second) const {
-  const size_t stream_vectors = content_.stream_basis.size();
-  for (size_t w = 0; w < content_.welded_count; ++w) {
-    const uint32_t k = content_.labels[w], m = content_.basis_size[k];
-    if (m == 0) {
-      first[w * 3] = first[w * 3 + 1] = first[w * 3 + 2] = 0.0;
-      second[w * 3] = second[w * 3 + 1] = second[w * 3 + 2] = 0.0;
-      continue;
-    }
-    const bool own = content_.basis_source[k] == format::kBasisOwn;
-    const size_t stride = own ? m : stream_vectors;  // from one frame's basis values to the next frame's
-    const double* basis = own ? own_[k].data() + frame * m : stream_.data() + frame * stream_vectors;
-    const double* c = scaled_.data() + offset_[w];
-    // Six sums side by side, each in the order frame() adds it.
-    double x0 = 0.0, y0 = 0.0, z0 = 0.0, x1 = 0.0, y1 = 0.0, z1 = 0.0;
-    for (uint32_t i = 0; i < m; ++i) {
-      const double b0 = basis[i], b1 = basis[stride + i];
-      const double cx = c[i], cy = c[m + i], cz = c[2 * m + i];
-      x0 = x0 + cx * b0;
-      y0 = y0 + cy * b0;
-      z0 = z0 + cz * b0;
-      x1 = x1 + cx * b1;
-      y1 = y1 + cy * b1;
-      z1 = z1 + cz * b1;
-    }
-    first[w * 3] = x0, first[w * 3 + 1] = y0, first[w * 3 + 2] = z0;
-    second[w * 3] = x1, second[w * 3 + 1] = y1, second[w * 3 + 2] = z1;
-  }
-}
-
 }  // namespace segmorph

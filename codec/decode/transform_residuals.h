@@ -40,12 +40,9 @@ class TransformResiduals {
 
   // Frame `frame`'s residuals, W × 3 doubles (vertex w, axis a at w × 3 + a): for each, r = 0.0, then for i = 0 ..
   // m − 1, r = r + (double(q_i) × double(D)) × b_i(f), b_i(f) = double(entry) × double(step) of the vector (both
-  // products computed once, the same doubles).
+  // products computed once, the same doubles). The reference, one frame at a time: the decoder's frame loop computes
+  // the same doubles a block of frames at a time (transform_blocks.h).
   void frame(size_t frame, double* out) const;
-
-  // Frames `frame` and `frame` + 1 at once, into first and second (W × 3 each): the same sums as frame() gives each,
-  // in the same order, from one pass over the coefficients (which a rich stream reads more of than anything else).
-  void two_frames(size_t frame, double* first, double* second) const;
 
   // What frame() reads. Vertex w's scaled coefficients are scaled()[offsets()[w] + a × m + i] (axis a, vector i);
   // the stream's basis value of vector i in frame f is stream_values()[f × G + i] (G its vectors), cluster k's own

@@ -18,6 +18,17 @@ inline int64_t rounded_mean(int64_t sum, int64_t count) {
   return sum >= 0 ? (2 * sum + count) / (2 * count) : -((-2 * sum + count) / (2 * count));
 }
 
+// The same with the division by 2 × count done as a multiplication where the dividend has 32 bits (nearly always):
+// magic = reciprocal(count). Exact (Lemire, Kaser and Kurz, "Faster remainder by direct computation", 2019: for
+// 32-bit dividends and divisors, x / d = (⌈2^64 / d⌉ × x) >> 64); a 64-bit division costs more than the rest of the
+// walk.
+inline uint64_t reciprocal(int64_t count) { return UINT64_MAX / uint64_t(2 * count) + 1; }
+inline int64_t rounded_mean(int64_t sum, int64_t count, uint64_t magic) {
+  const uint64_t x = 2 * uint64_t(sum >= 0 ? sum : -sum) + uint64_t(count);
+  const uint64_t q = x >> 32 == 0 ? uint64_t((static_cast<unsigned __int128>(magic) * x) >> 64) : x / uint64_t(2 * count);
+  return sum >= 0 ? int64_t(q) : -int64_t(q);
+}
+
 // Per welded vertex, its place among its cluster's welded vertices (ascending); per cluster, where its symbols start.
 struct SymbolLayout {
   std::vector<uint32_t> rank;
@@ -55,11 +66,13 @@ bool walk(const StreamContent& content, const ResidualTraversal& traversal, cons
       const uint32_t neighbour = traversal.order[traversal.earlier[j]];
       if (content.labels[neighbour] == k) same.push_back(coefficients.offset[neighbour]);
     }
+    const int64_t count = int64_t(same.size());
+    const uint64_t magic = count > 0 ? reciprocal(count) : 0;
     for (uint32_t a = 0; a < 3; ++a)
       for (uint32_t i = 0; i < m; ++i) {
         int64_t sum = 0;
         for (uint64_t offset : same) sum += coefficients.values[offset + a * m + i];
-        const int64_t prediction = same.empty() ? 0 : rounded_mean(sum, int64_t(same.size()));
+        const int64_t prediction = count == 0 ? 0 : rounded_mean(sum, count, magic);
         const uint64_t symbol = layout.start[k] + (uint64_t(i) * 3 + a) * layout.members[k] + layout.rank[w];
         if (!code(coefficients.offset[w] + a * m + i, prediction, symbol)) return false;
       }

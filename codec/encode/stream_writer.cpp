@@ -24,6 +24,9 @@ struct HeadWriter {
   void bit(BitModel& model, uint32_t& value) { coder.encode_bit(model, value); }
   void tree(BitTreeModel& model, uint32_t& value) { model.encode(coder, value); }
   void integer(SignedModel& model, int32_t& value) { model.encode(coder, value); }
+  void integers(SignedModel& model, int32_t* values, size_t count) {
+    for (size_t i = 0; i < count; ++i) model.encode(coder, values[i]);
+  }
   void float_bits(float& value) { coder.encode_direct_bits(segmorph::float_bits(value), 32); }
   template <typename T>
   void grow(std::vector<T>& values, size_t size) {

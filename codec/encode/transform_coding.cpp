@@ -77,14 +77,18 @@ bool decoded_error(const EncodeProblem& problem, const StreamContent& content, d
       failed[begin] = 1;
       return;
     }
-    std::vector<float> frame(size_t(content.vertex_count) * 3);
+    const size_t frame_floats = size_t(content.vertex_count) * 3;
+    std::vector<float> frames(loop.block_frames() * frame_floats);
     const FrameLoop::Residuals none;  // version 4 reads no residual symbols
-    for (size_t f = begin; f < end; ++f) {
-      if (!loop.decode(f, none, frame.data(), nullptr).ok()) {
+    for (size_t f = begin; f < end;) {
+      const size_t count = std::min(end - f, loop.block_frames());
+      if (!loop.decode(f, none, count, frames.data()).ok()) {
         failed[f] = 1;
         return;
       }
-      add_squared_error(originals[f], frame.data(), frame.size(), frame_error[f]);
+      for (size_t s = 0; s < count; ++s)
+        add_squared_error(originals[f + s], &frames[s * frame_floats], frame_floats, frame_error[f + s]);
+      f += count;
     }
   });
   if (std::find(failed.begin(), failed.end(), 1) != failed.end()) return false;

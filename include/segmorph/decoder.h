@@ -36,7 +36,9 @@ namespace segmorph {
 //
 // Memory: the decoder holds the stream (a copy), the base mesh (a copy), the stream's motion (12 integers per frame
 // and cluster), per-vertex state (about 500 bytes per vertex) and a checkpoint per clip start passed (about 3 bytes
-// per vertex); never the frames.
+// per vertex); never a clip's frames. It reconstructs a few frames at a time (two; eight in stream version 4, whose
+// coefficients it also holds: docs/runtime.md), and decode_frame() keeps the ones after the frame it returns until
+// they are asked for.
 class SEGMORPH_API AnimationDecoder {
  public:
   AnimationDecoder();

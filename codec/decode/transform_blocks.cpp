@@ -1,0 +1,142 @@
+#include "decode/transform_blocks.h"
+
+#include <cassert>
+
+#include "common/stream_format.h"
+
+namespace segmorph {
+namespace {
+
+// kMaxFrames doubles, one frame each, and their floats (GCC's and Clang's vector extension: one AVX-512 register,
+// two AVX or four SSE2 ones, whatever the function is compiled for).
+typedef double Lanes __attribute__((vector_size(64)));
+typedef float FloatLanes __attribute__((vector_size(32)));
+static_assert(sizeof(Lanes) == TransformBlocks::kMaxFrames * sizeof(double), "a lane per frame");
+// The lanes of a row of TransformBlocks' values from a frame on (at any double's alignment).
+typedef double RowLanes __attribute__((vector_size(64), aligned(8), may_alias));
+inline const RowLanes& at(const double* from) { return *reinterpret_cast<const RowLanes*>(from); }
+
+// The block's frames of every vertex: its prediction (spec 8.5: for each of its clusters, weight × (row · (x − c, 1)),
+// summed in the clusters' order), its residuals (8.7.1), their sum as floats, each lane stored into its frame.
+// Inlined into one function per instruction set below, which the compiler vectorizes for that set.
+__attribute__((always_inline)) inline void reconstruct_block(const TransformBlocks::Data& d, size_t frame,
+                                                             size_t count, float* out) {
+  const size_t stride = d.stride, row = d.vertex_count * 3;
+  const double* lanes = d.lanes + frame;
+  const TransformBlocks::Pair* pair = d.pairs;
+  for (size_t w = 0; w < d.vertex_count; ++w) {
+    const TransformBlocks::Vertex& vertex = d.vertices[w];
+    Lanes px = {}, py = {}, pz = {};
+    for (const TransformBlocks::Pair* end = d.pairs + vertex.pairs_end; pair < end; ++pair) {
+      const double* t = lanes + pair->transform;
+      const double x = pair->x, y = pair->y, z = pair->z, weight = pair->weight;
+      px = px + weight * (at(t) * x + at(t + stride) * y + at(t + 2 * stride) * z + at(t + 3 * stride));
+      t += 4 * stride;
+      py = py + weight * (at(t) * x + at(t + stride) * y + at(t + 2 * stride) * z + at(t + 3 * stride));
+      t += 4 * stride;
+      pz = pz + weight * (at(t) * x + at(t + stride) * y + at(t + 2 * stride) * z + at(t + 3 * stride));
+    }
+    Lanes rx = {}, ry = {}, rz = {};
+    const double* basis = lanes + vertex.basis;
+    const double* c = vertex.coefficients;
+    for (uint32_t i = 0, m = vertex.m; i < m; ++i) {
+      const Lanes b = at(basis + i * stride);
+      rx = rx + c[i] * b;
+      ry = ry + c[m + i] * b;
+      rz = rz + c[2 * m + i] * b;
+    }
+    const FloatLanes x = __builtin_convertvector(px + rx, FloatLanes), y = __builtin_convertvector(py + ry, FloatLanes),
+                     z = __builtin_convertvector(pz + rz, FloatLanes);
+    float* to = out + w * 3;
+    if (count == TransformBlocks::kMaxFrames) {
+      for (size_t f = 0; f < TransformBlocks::kMaxFrames; ++f)
+        to[f * row] = x[f], to[f * row + 1] = y[f], to[f * row + 2] = z[f];
+    } else {
+      for (size_t f = 0; f < count; ++f) to[f * row] = x[f], to[f * row + 1] = y[f], to[f * row + 2] = z[f];
+    }
+  }
+}
+
+void reconstruct_baseline(const TransformBlocks::Data& d, size_t frame, size_t count, float* out) {
+  reconstruct_block(d, frame, count, out);
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+// No FMA in either (nor does -ffp-contract=off let the compiler fuse): every product and sum rounds as written.
+__attribute__((target("avx"))) void reconstruct_avx(const TransformBlocks::Data& d, size_t frame, size_t count,
+                                                     float* out) {
+  reconstruct_block(d, frame, count, out);
+}
+
+__attribute__((target("avx512f"))) void reconstruct_avx512(const TransformBlocks::Data& d, size_t frame,
+                                                           size_t count, float* out) {
+  reconstruct_block(d, frame, count, out);
+}
+#endif
+
+TransformBlocks::Instructions available(TransformBlocks::Instructions wanted) {
+  using Instructions = TransformBlocks::Instructions;
+#if defined(__x86_64__) || defined(__i386__)
+  const bool avx512 = __builtin_cpu_supports("avx512f"), avx = __builtin_cpu_supports("avx");
+  if ((wanted == Instructions::best || wanted == Instructions::avx512) && avx512) return Instructions::avx512;
+  if (wanted != Instructions::baseline && avx) return Instructions::avx;
+#else
+  (void)wanted;
+#endif
+  return Instructions::baseline;
+}
+
+}  // namespace
+
+TransformBlocks::TransformBlocks(const StreamContent& content, const TransformResiduals& residuals,
+                                 const float* welded, const AffineMotion& motion, const ClusterWeights& weights,
+                                 Instructions instructions)
+    : stride_(content.frame_count() + kMaxFrames), instructions_(available(instructions)) {
+  const size_t frames = content.frame_count(), clusters = content.cluster_count;
+  // Where each basis and each cluster's transforms start in lanes_ (in rows).
+  size_t rows = content.stream_basis.size();
+  std::vector<size_t> basis_row(clusters, 0), transform_row(clusters);
+  for (size_t k = 0; k < clusters; ++k)
+    if (content.basis_source[k] == format::kBasisOwn) basis_row[k] = rows, rows += content.basis_size[k];
+  for (size_t k = 0; k < clusters; ++k) transform_row[k] = rows, rows += 12;
+  lanes_.assign(rows * stride_, 0.0);
+  auto put_basis = [&](const StreamContent::Basis& basis, size_t vectors, size_t first_row) {
+    for (size_t i = 0; i < vectors; ++i)
+      for (size_t f = 0; f < frames; ++f)
+        lanes_[(first_row + i) * stride_ + f] = double(basis.entries[i * frames + f]) * double(basis.step[i]);
+  };
+  put_basis(content.stream_basis, content.stream_basis.size(), 0);
+  for (size_t k = 0; k < clusters; ++k)
+    if (content.basis_source[k] == format::kBasisOwn) put_basis(content.own_basis[k], content.basis_size[k], basis_row[k]);
+  for (size_t k = 0; k < clusters; ++k)
+    for (size_t f = 0; f < frames; ++f)
+      for (size_t j = 0; j < 12; ++j) lanes_[(transform_row[k] + j) * stride_ + f] = motion.transform(f, k)[j];
+
+  const size_t vertex_count = content.welded_count;
+  assert(weights.offset.size() == vertex_count + 1);
+  vertices_.resize(vertex_count);
+  pairs_.reserve(weights.cluster.size());
+  for (size_t w = 0; w < vertex_count; ++w) {
+    const uint32_t k = content.labels[w];
+    for (uint32_t i = weights.offset[w]; i < weights.offset[w + 1]; ++i) {
+      const uint32_t cluster = weights.cluster[i];
+      const double* c = &motion.centroid[size_t(cluster) * 3];
+      pairs_.push_back(Pair{double(welded[w * 3]) - c[0], double(welded[w * 3 + 1]) - c[1],
+                            double(welded[w * 3 + 2]) - c[2], weights.weight[i], transform_row[cluster] * stride_});
+    }
+    vertices_[w] = Vertex{basis_row[k] * stride_, residuals.scaled().data() + residuals.offsets()[w],
+                          content.basis_size[k], uint32_t(pairs_.size())};
+  }
+}
+
+void TransformBlocks::reconstruct(size_t frame, size_t count, float* out) const {
+  assert(count >= 1 && count <= kMaxFrames);
+  const Data data{lanes_.data(), stride_, vertices_.data(), vertices_.size(), pairs_.data()};
+#if defined(__x86_64__) || defined(__i386__)
+  if (instructions_ == Instructions::avx512) return reconstruct_avx512(data, frame, count, out);
+  if (instructions_ == Instructions::avx) return reconstruct_avx(data, frame, count, out);
+#endif
+  reconstruct_baseline(data, frame, count, out);
+}
+
+}  // namespace segmorph
