@@ -218,9 +218,15 @@ Status encode(Model&& input, const EncodeSettings& settings, Model& output, Enco
 }
 
 Status decode(Model& model, DecodeReport* report, std::vector<DecodedFrames>* frames) {
+  DecodeSettings one_thread;
+  one_thread.threads = 1;
+  return decode(model, one_thread, report, frames);
+}
+
+Status decode(Model& model, const DecodeSettings& settings, DecodeReport* report, std::vector<DecodedFrames>* frames) {
   return guarded([&]() -> Status {
     DecodedSizes sizes;
-    SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(model.data().gltf, &sizes, frames));
+    SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(model.data().gltf, &sizes, frames, settings.threads));
     if (sizes.primitives > 0 || sizes.coded_animations > 0) name_generator(model.data().gltf);
     if (report) *report = {sizes.animation_bytes, sizes.primitives, sizes.coded_animations};
     return Status::Ok();

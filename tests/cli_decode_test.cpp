@@ -42,6 +42,33 @@ TEST(Cli, EncodeDecodeAndVerify) {
   EXPECT_FALSE(fs::exists(directory + "/not.glb"));
 }
 
+// decode --threads: the same file and frames for any number of threads (the chicken's version-4 stream of 400 frames,
+// where ../shared has it; else the bending flag's), and a count out of range is refused.
+TEST(Cli, DecodeThreadsGiveTheSameOutput) {
+  const std::string directory = output_directory("decode_threads");
+  const std::string shared = std::string(SEGMORPH_SHARED_SAMPLES_DIR) + "/sequences/ChickenCrossing/chicken.glb";
+  const std::string input = fs::exists(shared) ? shared : sample("WavingFlag/flag.glb");
+  Result result = run("encode -q " + input + " -o " + directory + "/encoded.glb --gpu-playable");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  std::string glb[3], frames[3];
+  const char* threads[3] = {"1", "3", "0"};
+  for (int i = 0; i < 3; ++i) {
+    const std::string stem = directory + "/decoded" + std::to_string(i);
+    result = run("decode -q " + directory + "/encoded.glb -o " + stem + ".glb --frames " + stem + ".bin --threads " +
+                 threads[i]);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    glb[i] = read_text(stem + ".glb"), frames[i] = read_text(stem + ".bin");
+  }
+  EXPECT_GT(frames[0].size(), 0u);
+  for (int i = 1; i < 3; ++i) {
+    EXPECT_TRUE(glb[i] == glb[0]) << "--threads " << threads[i];
+    EXPECT_TRUE(frames[i] == frames[0]) << "--threads " << threads[i];
+  }
+  result = run("decode -q " + directory + "/encoded.glb -o " + directory + "/x.glb --threads 2000");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--threads"), std::string::npos) << result.err;
+}
+
 // decode --frames writes what the streams decode to, as raw floats: for a primitive that plays clips, its frames, whose
 // first is the decoded file's base and each other the base plus its target (within an ulp of the larger of the two,
 // spec/README.md); for kept

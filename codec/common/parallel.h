@@ -1,5 +1,5 @@
-// Work split over threads for the encoder's stages (never the decoder's: the runtime decoder stays single-threaded
-// and dependency-free). Each call runs contiguous ranges of its items on up to `threads` threads and returns when
+// Work split over threads: the encoder's stages, and the runtime decoder's version-4 frames where its caller asks
+// for threads (AnimationDecoder::set_threads; never in its WebAssembly build, which has none). Each call runs contiguous ranges of its items on up to `threads` threads and returns when
 // all are done; the ranges, and so whatever the body computes per item, do not depend on the thread count. Callers
 // keep results per item (or per range in range order), so the output is the same bytes for every thread count.
 #pragma once

@@ -7,9 +7,13 @@
 #include <cassert>
 #include <cmath>
 #include <cstring>
+#include <system_error>
 
 #include "common/frame_sequence.h"
 #include "common/stream_format.h"
+#if !defined(__wasi__)  // WebAssembly (WASI) has no threads
+#include "common/parallel.h"
+#endif
 
 namespace segmorph {
 namespace {
@@ -93,7 +97,17 @@ Status FrameLoop::reconstruct(size_t frame, const Residuals& residuals, size_t c
   return all_finite(welded_frames_.data(), count * row_) ? Status::Ok() : not_finite();
 }
 
+Status FrameLoop::decode_independent(size_t frame, size_t count, float* out, float* welded_frames) const {
+  assert(blocks_ && count >= 1 && count <= block_frames());
+  blocks_->reconstruct(frame, count, welded_frames);
+  if (!all_finite(welded_frames, count * row_)) return not_finite();
+  const size_t floats = to_vertices_.vertex_count() * 3;
+  for (size_t s = 0; s < count; ++s) to_vertices_.gather(welded_frames + s * row_, out + s * floats);
+  return Status::Ok();
+}
+
 Status FrameLoop::decode(size_t frame, const Residuals& residuals, size_t count, float* out) {
+  if (blocks_) return decode_independent(frame, count, out, welded_frames_.data());
   SEGMORPH_RETURN_IF_ERROR(reconstruct(frame, residuals, count));
   const size_t floats = to_vertices_.vertex_count() * 3;
   for (size_t s = 0; s < count; ++s) to_vertices_.gather(&welded_frames_[s * row_], out + s * floats);
@@ -207,6 +221,53 @@ Status FrameDecoder::decode(size_t count, float* out) {
 Status FrameDecoder::decode_append(size_t count, std::vector<float>& out) {
   SEGMORPH_RETURN_IF_ERROR(before_decode(count));
   return after_decode(loop_->decode_append(frame_, residuals_, count, out), count);
+}
+
+Status FrameDecoder::decode_frames(size_t count, float* out, size_t threads) {
+  assert(is_open());
+  const size_t block = block_frames(), floats = size_t(content_.vertex_count) * 3;
+#if !defined(__wasi__)  // WebAssembly (WASI) has no threads: the loop below
+  const size_t blocks = (count + block - 1) / block;
+  threads = std::min(thread_count(threads), blocks);
+  if (threads > 1 && content_.transform) {
+    if (!failure_.ok()) return failure_;
+    if (count > frames_left_in_clip())
+      return Status(StatusCode::invalid_argument, std::to_string(count) + " frames asked for where the clip has " +
+                                                      std::to_string(frames_left_in_clip()) + " left");
+    // Version 4: the blocks in ranges, one a thread, each with its own room for the welded frames; the first failing
+    // block's status (in frame order) is the result, as one thread would report it.
+    std::vector<Status> failed(blocks);
+    auto decode_blocks = [&](size_t begin, size_t end) {
+      std::vector<float> welded(block * size_t(content_.welded_count) * 3);
+      for (size_t b = begin; b < end; ++b) {
+        const size_t f = b * block, n = std::min(count - f, block);
+        failed[b] = loop_->decode_independent(frame_ + f, n, out + f * floats, welded.data());
+        if (!failed[b].ok()) return;
+      }
+    };
+    try {
+      parallel_ranges(blocks, threads, decode_blocks);
+    } catch (const std::system_error&) {  // no thread could be started: all on this one (the frames do not change)
+      std::fill(failed.begin(), failed.end(), Status::Ok());
+      decode_blocks(0, blocks);
+    }
+    Status status = Status::Ok();
+    for (const Status& s : failed)
+      if (!s.ok()) {
+        status = s;
+        break;
+      }
+    return after_decode(status, count);
+  }
+#else
+  (void)threads;
+#endif
+  for (size_t f = 0; f < count;) {
+    const size_t n = std::min(count - f, block);
+    SEGMORPH_RETURN_IF_ERROR(decode(n, out + f * floats));
+    f += n;
+  }
+  return Status::Ok();
 }
 
 Status FrameDecoder::skip_frame() {

@@ -102,6 +102,8 @@ AnimationDecoder::~AnimationDecoder() = default;
 AnimationDecoder::AnimationDecoder(AnimationDecoder&&) noexcept = default;
 AnimationDecoder& AnimationDecoder::operator=(AnimationDecoder&&) noexcept = default;
 
+void AnimationDecoder::set_threads(size_t threads) { threads_ = threads; }
+
 Status AnimationDecoder::open(const void* stream, size_t stream_size, const float* positions, size_t vertex_count,
                               const uint32_t* indices, size_t index_count) {
   close();
@@ -172,21 +174,14 @@ Status AnimationDecoder::seek(size_t clip) {
 
 Status AnimationDecoder::decode_clip(size_t clip, float* destination, size_t destination_floats) {
   SEGMORPH_RETURN_IF_ERROR(seek(clip));
-  const size_t floats = clip_floats(clip), frame_floats = vertex_count() * 3;
+  const size_t floats = clip_floats(clip);
   if (!destination) return invalid("the destination is null");
   if (destination_floats < floats)
     return invalid("the destination holds " + std::to_string(destination_floats) + " floats, the clip needs " +
                    std::to_string(floats));
   State& state = *state_;
   state.pending_count = 0;
-  return guarded([&] {
-    for (size_t f = 0, frames = frame_count(clip); f < frames;) {
-      const size_t count = std::min(frames - f, state.decoder.block_frames());
-      SEGMORPH_RETURN_IF_ERROR(state.decoder.decode(count, destination + f * frame_floats));
-      f += count;
-    }
-    return Status::Ok();
-  });
+  return guarded([&] { return state.decoder.decode_frames(frame_count(clip), destination, threads_); });
 }
 
 Status AnimationDecoder::decode_targets(float* destination, size_t destination_floats) {

@@ -155,6 +155,12 @@ segmorph_status segmorph_decoder_seek(segmorph_decoder* decoder, size_t clip) {
   return report(decoder, decoder->decoder.seek(clip));
 }
 
+segmorph_status segmorph_decoder_set_threads(segmorph_decoder* decoder, size_t threads) {
+  if (!decoder) return null_decoder();
+  decoder->decoder.set_threads(threads);
+  return report(decoder, segmorph::Status::Ok());
+}
+
 segmorph_status segmorph_decoder_model_info(segmorph_decoder* decoder, segmorph_model_info* info) {
   if (!decoder) return null_decoder();
   if (!info) return report(decoder, segmorph::Status(segmorph::StatusCode::invalid_argument, "the info is null"));

@@ -56,6 +56,11 @@ class FrameLoop {
   // The same, appending the frames' floats to `out` (which grows without being zero-filled first).
   Status decode_append(size_t frame, const Residuals& residuals, size_t count, std::vector<float>& out);
 
+  // Version 4 only (transform() not null): decode() of `count` frames (1 .. block_frames()) with the caller's room
+  // for the welded frames (block_frames() × W × 3 floats) instead of the loop's, so that several threads may
+  // decode frames of one loop at once.
+  Status decode_independent(size_t frame, size_t count, float* out, float* welded_frames) const;
+
  private:
   Status reconstruct(size_t frame, const Residuals& residuals, size_t count);
 
@@ -113,6 +118,10 @@ class FrameDecoder {
   Status decode(size_t count, float* out);
   // The same, appending to `out`.
   Status decode_append(size_t count, std::vector<float>& out);
+  // The next `count` frames (any number within the clip) into out, frame after frame, a block at a time; a version-4
+  // stream's blocks on up to `threads` threads (0: every hardware thread; a WebAssembly build has none and uses the
+  // calling one). The same floats for every thread count.
+  Status decode_frames(size_t count, float* out, size_t threads);
 
   // Positions the decoder at the first frame of `clip` (< the clip count). Versions 1 to 3: a clip start the decoder
   // has passed is restored from a checkpoint (about 3 bytes per welded vertex, kept while they take at most 64 MiB

@@ -145,7 +145,7 @@ int run_batch(const CommandLine& options, const std::vector<BatchFile>& files, i
         one.label = files[child.file].input;
         // The cores are shared by the files running at once (unless --threads says otherwise).
         if (one.encode.threads == 0)
-          one.encode.threads = std::max<size_t>(1, std::thread::hardware_concurrency() / jobs);
+          one.encode.threads = one.decode.threads = std::max<size_t>(1, std::thread::hardware_concurrency() / jobs);
         const int code = single(one);
         std::fflush(stdout);
         std::fflush(stderr);

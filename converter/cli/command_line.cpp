@@ -139,12 +139,14 @@ const Option kOptions[] = {
     {"--lossless", nullptr, nullptr, kEncode, Kind::flag, 0, 0, false, nullptr, 1,
      "restore the sampled frames bit for bit",
      [](CommandLine& line, const std::string&, double) { line.encode.mode = RateMode::lossless; }},
-    {"--threads", "-t", "N", kEncode, Kind::whole, 0, 1024, false, nullptr, 0,
-     "threads for the encoding stages that split their work (the motion fits and refinement, rate control's "
-     "measurements, the comparison with the input), {range}; "
+    {"--threads", "-t", "N", kEncode | kDecode, Kind::whole, 0, 1024, false, nullptr, 0,
+     "threads for the work that splits: encode's stages (the motion fits and refinement, rate control's "
+     "measurements, the comparison with the input), decode's frames of version-4 streams; {range}; "
      "0 (default): every core, shared by the files of a batch that run at once (--jobs). The output is the same "
      "bytes for every N",
-     [](CommandLine& line, const std::string&, double number) { line.encode.threads = size_t(number); }},
+     [](CommandLine& line, const std::string&, double number) {
+       line.encode.threads = line.decode.threads = size_t(number);
+     }},
     {"--fast-decode", nullptr, nullptr, kEncode, Kind::flag, 0, 0, false, nullptr, 0,
      "code the residuals for decoding speed (stream version 2, its table code): about a third less decoding time, "
      "files 1 to 11 % larger on the three classic sequences (docs/codec.md). Not with --lossless",

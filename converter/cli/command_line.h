@@ -19,6 +19,7 @@ struct CommandLine {
   std::string cache, cache2;  // --cache: the point cache of the first input (a base mesh); --cache2: of verify's second
   SampleSettings sampling;
   EncodeSettings encode;  // its sampling is `sampling`
+  DecodeSettings decode;  // --threads too
   bool json = false;
   bool quiet = false;
   bool force = false;  // an output may replace the input

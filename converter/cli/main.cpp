@@ -146,7 +146,7 @@ int run_decode(const CommandLine& options) {
   Status status = load(0, options, model, sampling);
   if (status.ok())
     if (const int refused = refuse_replacing_input(options, model)) return refused;
-  if (status.ok()) status = decode(model, &report, options.frames.empty() ? nullptr : &decoded);
+  if (status.ok()) status = decode(model, options.decode, &report, options.frames.empty() ? nullptr : &decoded);
   if (!status.ok()) return fail(options, path, status);
   if (report.primitives == 0 && report.coded_animations == 0)
     return fail(options, path, Status(StatusCode::nothing_to_do,

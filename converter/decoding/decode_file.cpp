@@ -25,7 +25,7 @@ namespace {
 // sized by them.
 Status decode_primitive_stream(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
                                const CompressedPrimitive& compressed, const std::vector<size_t>& frames,
-                               const std::string& what, SampledPrimitive& out, size_t& bytes) {
+                               const std::string& what, size_t threads, SampledPrimitive& out, size_t& bytes) {
   SEGMORPH_RETURN_IF_ERROR(read_rest_attributes(model, primitive, what, out));
   std::vector<uint32_t> triangles;
   if (primitive.indices < 0) return Status(StatusCode::bad_data, what + ": a compressed primitive needs indices");
@@ -37,6 +37,7 @@ Status decode_primitive_stream(const tinygltf::Model& model, const tinygltf::Pri
   const unsigned char* data = nullptr;
   SEGMORPH_RETURN_IF_ERROR(buffer_view_bytes(model, compressed.buffer_view, what + " " + kExtensionName, &data, &bytes));
   AnimationDecoder decoder;
+  decoder.set_threads(threads);
   auto failed = [&](const Status& status) { return Status(status.code(), what + ": " + status.message()); };
   Status status = decoder.open(data, bytes, out.rest_positions.data(), out.rest_positions.size() / 3,
                                triangles.data(), triangles.size());
@@ -80,11 +81,11 @@ DecodedFrames decoded_frames(int mesh, int primitive, bool targets, const std::v
 // decoded displacements, NORMAL (where the target has it) turned by the decoder (AnimationDecoder::turn_normals).
 // `bytes`: the stream's length.
 Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
-                       const std::string& what, size_t& bytes, std::vector<FrameSequence>* frames) {
+                       const std::string& what, size_t threads, size_t& bytes, std::vector<FrameSequence>* frames) {
   SampledPrimitive rest;
   if (primitive.targets.empty()) return Status(StatusCode::bad_data, what + ": it keeps morph targets but has none");
   SEGMORPH_RETURN_IF_ERROR(
-      decode_primitive_stream(model, primitive, compressed, {primitive.targets.size()}, what, rest, bytes));
+      decode_primitive_stream(model, primitive, compressed, {primitive.targets.size()}, what, threads, rest, bytes));
   const std::vector<FrameSequence>& clips = rest.clips;
   const size_t vertex_count = rest.rest_positions.size() / 3;
   for (const std::map<std::string, int>& target : primitive.targets)
@@ -275,8 +276,8 @@ Status clip_times(const tinygltf::Model& model, const CompressedPrimitive& compr
 
 // The primitives of a mesh that plays clips, decoded into `node` (sampled as bake takes them).
 Status decode_clip_mesh(tinygltf::Model& model, const AnimatedNode& animated,
-                        const std::vector<CompressedPrimitive>& streams, SampledNode& node, DecodedSizes& found,
-                        std::vector<DecodedFrames>* decoded) {
+                        const std::vector<CompressedPrimitive>& streams, size_t threads, SampledNode& node,
+                        DecodedSizes& found, std::vector<DecodedFrames>* decoded) {
   node.node = &animated;
   tinygltf::Mesh& mesh = model.meshes[size_t(animated.mesh)];
   for (const CompressedClip& clip : streams[0].clips) node.clip_is_step.push_back(clip.step);
@@ -290,7 +291,7 @@ Status decode_clip_mesh(tinygltf::Model& model, const AnimatedNode& animated,
     SampledPrimitive out;
     out.primitive = int(p);
     size_t bytes = 0;
-    SEGMORPH_RETURN_IF_ERROR(decode_primitive_stream(model, primitive, streams[p], frames, what, out, bytes));
+    SEGMORPH_RETURN_IF_ERROR(decode_primitive_stream(model, primitive, streams[p], frames, what, threads, out, bytes));
     found.animation_bytes += bytes;
     ++found.primitives;
     for (size_t c = 0; c < out.clips.size(); ++c) out.clips[c].times = std::move(times[c]);
@@ -303,13 +304,13 @@ Status decode_clip_mesh(tinygltf::Model& model, const AnimatedNode& animated,
 
 // The primitives of a mesh that keeps its morph targets, filled in.
 Status decode_target_mesh(tinygltf::Model& model, size_t m, const std::vector<CompressedPrimitive>& primitives,
-                          DecodedSizes& found, std::vector<DecodedFrames>* decoded) {
+                          size_t threads, DecodedSizes& found, std::vector<DecodedFrames>* decoded) {
   for (size_t p = 0; p < primitives.size(); ++p) {
     size_t bytes = 0;
     std::vector<FrameSequence> displacements;
     SEGMORPH_RETURN_IF_ERROR(restore_targets(model, model.meshes[m].primitives[p], primitives[p],
-                                             "mesh " + std::to_string(m) + " primitive " + std::to_string(p), bytes,
-                                             decoded ? &displacements : nullptr));
+                                             "mesh " + std::to_string(m) + " primitive " + std::to_string(p),
+                                             threads, bytes, decoded ? &displacements : nullptr));
     if (decoded) decoded->push_back(decoded_frames(int(m), int(p), true, displacements));
     found.animation_bytes += bytes;
     ++found.primitives;
@@ -319,7 +320,8 @@ Status decode_target_mesh(tinygltf::Model& model, size_t m, const std::vector<Co
 
 }  // namespace
 
-Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std::vector<DecodedFrames>* decoded) {
+Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std::vector<DecodedFrames>* decoded,
+                               size_t threads) {
   SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(model));
   if (!declares_extension(model, kExtensionName)) return Status::Ok();
   DecodedSizes found;
@@ -337,7 +339,7 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std:
     SEGMORPH_RETURN_IF_ERROR(read_compressed_mesh(model, m, primitives, user));
     if (primitives.empty()) continue;
     if (primitives[0].morph_targets) {
-      SEGMORPH_RETURN_IF_ERROR(decode_target_mesh(model, m, primitives, found, decoded));
+      SEGMORPH_RETURN_IF_ERROR(decode_target_mesh(model, m, primitives, threads, found, decoded));
       continue;
     }
     AnimatedNode node;
@@ -350,7 +352,8 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std:
   }
   std::vector<SampledNode> sampled(scene.animated.size());
   for (size_t i = 0; i < scene.animated.size(); ++i)
-    SEGMORPH_RETURN_IF_ERROR(decode_clip_mesh(model, scene.animated[i], streams[i], sampled[i], found, decoded));
+    SEGMORPH_RETURN_IF_ERROR(
+        decode_clip_mesh(model, scene.animated[i], streams[i], threads, sampled[i], found, decoded));
   for (tinygltf::Animation& animation : model.animations)
     animation.channels.erase(
         std::remove_if(animation.channels.begin(), animation.channels.end(), is_placeholder_channel),

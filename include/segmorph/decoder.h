@@ -78,6 +78,13 @@ class SEGMORPH_API AnimationDecoder {
   // that. Afterwards the decoder stands at the next clip's first frame. On bad data the destination holds garbage.
   Status decode_clip(size_t clip, float* destination, size_t destination_floats);
 
+  // Threads that decode_clip() and decode_targets() may use for a version-4 stream, whose frames depend on no other
+  // (versions 1 to 3 decode on the calling thread): 1, the default, or 0 for every hardware thread. The frames are the
+  // same floats for any number. Threads are started for each call and joined before it returns. A WebAssembly build
+  // decodes on the calling thread whatever the setting. Kept across open().
+  void set_threads(size_t threads);
+  size_t threads() const { return threads_; }
+
   // For a primitive that keeps its morph targets (spec/README.md, "Kept morph targets": its extension object has
   // "morphTargets": true and the stream one clip of T frames, T the primitive's target count): the targets' POSITION
   // displacements, frame_t − base per coordinate in binary32, T × vertex_count() × 3 floats into destination, which
@@ -162,6 +169,7 @@ class SEGMORPH_API AnimationDecoder {
 
   struct State;
   std::unique_ptr<State> state_;
+  size_t threads_ = 1;
 };
 
 // The track stream of an animation (spec/tracks.md): keyframe samplers of node translations, rotations, scales

@@ -113,6 +113,12 @@ SEGMORPH_API segmorph_status segmorph_decode_frame(segmorph_decoder* decoder, fl
  * keeps a checkpoint of about 3 bytes per vertex at each), else the cost of decoding the frames before it. */
 SEGMORPH_API segmorph_status segmorph_decoder_seek(segmorph_decoder* decoder, size_t clip);
 
+/* Threads segmorph_decode_clip and segmorph_decode_targets may use for a version-4 stream, whose frames depend on no
+ * other (versions 1 to 3 decode on the calling thread): 1, the default, or 0 for every hardware thread; the same
+ * floats for any number. Started for each call and joined before it returns; kept across opens. A WebAssembly build
+ * decodes on the calling thread whatever the setting. */
+SEGMORPH_API segmorph_status segmorph_decoder_set_threads(segmorph_decoder* decoder, size_t threads);
+
 /* Normals that turn with the surface, as segmorph decode writes them (AnimationDecoder::turn_normals in decoder.h):
  * the base mesh's normals (vertex count x 3 floats) turned to each of frame_count frames (frame_count x vertex count
  * x 3 positions) into destination (room for destination_floats, at least frame_count x vertex count x 3). */

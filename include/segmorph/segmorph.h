@@ -316,6 +316,15 @@ struct DecodedFrames {
 // encoded is left as it is (report->primitives and coded_animations 0).
 Status decode(Model& model, DecodeReport* report = nullptr, std::vector<DecodedFrames>* frames = nullptr);
 
+struct DecodeSettings {
+  // Threads for each version-4 stream's frames (AnimationDecoder::set_threads); 0: every hardware thread. The output
+  // is the same for every number.
+  size_t threads = 0;
+};
+// The same with settings (the form above decodes on one thread).
+Status decode(Model& model, const DecodeSettings& settings, DecodeReport* report = nullptr,
+              std::vector<DecodedFrames>* frames = nullptr);
+
 // Writes decoded frames to `path` as raw little-endian float32, primitive after primitive, clip after clip, frame after
 // frame (the layout of `segmorph decode --frames` and examples/engine_decode), whole or not at all.
 Status save_decoded_frames(const std::vector<DecodedFrames>& frames, const std::string& path);
