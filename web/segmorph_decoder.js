@@ -1,6 +1,9 @@
 // segmorph's runtime decoder in JavaScript: the C++ decoder (include/segmorph/decoder_c.h) compiled to WebAssembly,
 // so that a browser decodes the same floats as an engine or `segmorph decode`. An ES module without dependencies;
-// the .wasm beside it is fetched (browsers) or read (Node.js) when the module loads.
+// the .wasm beside it is fetched (browsers) or read (Node.js) when the module loads: segmorph_decoder_simd.wasm where
+// the runtime has WebAssembly SIMD (every current browser and Node.js), else segmorph_decoder.wasm. To choose, set
+// globalThis.SEGMORPH_WASM (or, under Node.js, the environment variable SEGMORPH_WASM) to 'simd' or 'baseline' before
+// the module loads; SegmorphDecoder.module says which one it loaded.
 //
 //   import { SegmorphDecoder } from './segmorph_decoder.js';
 //   await SegmorphDecoder.ready;
@@ -44,8 +47,24 @@ function wasiImports() {
   };
 }
 
+// A module of one function that returns i32x4.splat(0): valid only where WebAssembly has SIMD.
+const SIMD_PROBE = new Uint8Array([0, 97, 115, 109, 1, 0, 0, 0, 1, 5, 1, 96, 0, 1, 123, 3, 2, 1, 0, 10, 8, 1, 6, 0, 65,
+                                   0, 253, 17, 11]);
+
+// 'simd' or 'baseline': the caller's choice, else SIMD where the runtime validates it.
+function wasmModule() {
+  const asked = globalThis.SEGMORPH_WASM ?? globalThis.process?.env?.SEGMORPH_WASM;
+  if (asked !== undefined && asked !== '') {
+    if (asked !== 'simd' && asked !== 'baseline')
+      throw new Error(`segmorph: SEGMORPH_WASM is '${asked}'; it takes 'simd' or 'baseline'`);
+    return asked;
+  }
+  return WebAssembly.validate(SIMD_PROBE) ? 'simd' : 'baseline';
+}
+const module = wasmModule();
+
 async function wasmBytes() {
-  const url = new URL('./segmorph_decoder.wasm', import.meta.url);
+  const url = new URL(module === 'simd' ? './segmorph_decoder_simd.wasm' : './segmorph_decoder.wasm', import.meta.url);
   if (url.protocol === 'file:') {  // Node.js
     const { readFile } = await import('node:fs/promises');
     return readFile(url);
@@ -450,6 +469,7 @@ function inWorker(method, args) {
 
 const api = {
   ready,
+  module,  // 'simd' or 'baseline': which .wasm this module loads (a worker decides for itself)
   decodeStream,
   decodeTargets,
   decodeTracks,

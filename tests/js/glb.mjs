@@ -89,3 +89,32 @@ export function writeHostileStreams(asset, directory) {
   cut.bufferViews[index].byteLength = Math.floor(view.byteLength / 2);
   writeFileSync(path.join(directory, 'truncated.glb'), glbBytes(cut, buffer));
 }
+
+// The bytes of bufferView `index` of an asset readAsset() read.
+export function viewBytes(asset, index) {
+  const view = asset.json.bufferViews[index];
+  return asset.buffers[view.buffer].subarray(view.byteOffset ?? 0, (view.byteOffset ?? 0) + view.byteLength);
+}
+
+// The base mesh of a KHR_draco_mesh_compression `extension` as a page's Draco decoder gives it: POSITION in point
+// order, the faces. `draco`: the draco3dgltf decoder module.
+export function dracoBase(draco, asset, extension) {
+  const bytes = viewBytes(asset, extension.bufferView);
+  const decoder = new draco.Decoder(), buffer = new draco.DecoderBuffer();
+  buffer.Init(new Int8Array(bytes.buffer, bytes.byteOffset, bytes.byteLength), bytes.byteLength);
+  const mesh = new draco.Mesh();
+  const status = decoder.DecodeBufferToMesh(buffer, mesh);
+  if (!status.ok()) throw new Error(`Draco: ${status.error_msg()}`);
+  const attribute = decoder.GetAttributeByUniqueId(mesh, extension.attributes.POSITION);
+  const points = mesh.num_points(), floats = points * 3, faces = mesh.num_faces();
+  let pointer = draco._malloc(floats * 4);
+  decoder.GetAttributeDataArrayForAllPoints(mesh, attribute, draco.DT_FLOAT32, floats * 4, pointer);
+  const positions = new Float32Array(draco.HEAPF32.buffer, pointer, floats).slice();
+  draco._free(pointer);
+  pointer = draco._malloc(faces * 12);
+  decoder.GetTrianglesUInt32Array(mesh, faces * 12, pointer);
+  const indices = new Uint32Array(draco.HEAPU32.buffer, pointer, faces * 3).slice();
+  draco._free(pointer);
+  for (const object of [mesh, buffer, decoder]) draco.destroy(object);
+  return { positions, indices };
+}

@@ -8,14 +8,15 @@
 // the base mesh's diagonal of the decoded one, and a primitive of versions 1-3 must say it has no model.
 //
 //   node tests/js/web_wasm_native.mjs SEGMORPH WEB_DIR WORK_DIR FILE...
-// Exit status 1 on any difference or failure, with one line saying where.
+// Exit status 1 on any difference or failure, with one line saying where. SEGMORPH_WASM=baseline tests the module
+// without WebAssembly SIMD (web/segmorph_decoder.js), by default the SIMD one.
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, readFileSync } from 'node:fs';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
 import { createRequire } from 'node:module';
 
-import { readAsset } from './glb.mjs';
+import { dracoBase, readAsset, viewBytes } from './glb.mjs';
 
 const require = createRequire(import.meta.url);
 const [segmorph, webDir, work, ...files] = process.argv.slice(2);
@@ -26,35 +27,14 @@ if (!segmorph || !webDir || !work || files.length === 0) {
 mkdirSync(work, { recursive: true });
 const { SegmorphDecoder } = await import(pathToFileURL(path.join(webDir, 'segmorph_decoder.js')).href);
 await SegmorphDecoder.ready;
+// SEGMORPH_WASM chooses the module (the test runs once with each); without it, SIMD where Node.js has it (always).
+const expected = process.env.SEGMORPH_WASM || 'simd';
+if (SegmorphDecoder.module !== expected) {
+  console.error(`web_wasm_native: the decoder loaded the ${SegmorphDecoder.module} module, not the ${expected} one`);
+  process.exit(1);
+}
 const draco = await require('draco3dgltf').createDecoderModule({});
 const NAME = 'SEGMORPH_animation_compression';
-
-function viewBytes(asset, index) {
-  const view = asset.json.bufferViews[index];
-  return asset.buffers[view.buffer].subarray(view.byteOffset ?? 0, (view.byteOffset ?? 0) + view.byteLength);
-}
-
-// The base mesh as a page's Draco decoder gives it: POSITION in point order, the faces.
-function dracoBase(asset, extension) {
-  const bytes = viewBytes(asset, extension.bufferView);
-  const decoder = new draco.Decoder(), buffer = new draco.DecoderBuffer();
-  buffer.Init(new Int8Array(bytes.buffer, bytes.byteOffset, bytes.byteLength), bytes.byteLength);
-  const mesh = new draco.Mesh();
-  const status = decoder.DecodeBufferToMesh(buffer, mesh);
-  if (!status.ok()) throw new Error(`Draco: ${status.error_msg()}`);
-  const attribute = decoder.GetAttributeByUniqueId(mesh, extension.attributes.POSITION);
-  const points = mesh.num_points(), floats = points * 3, faces = mesh.num_faces();
-  let pointer = draco._malloc(floats * 4);
-  decoder.GetAttributeDataArrayForAllPoints(mesh, attribute, draco.DT_FLOAT32, floats * 4, pointer);
-  const positions = new Float32Array(draco.HEAPF32.buffer, pointer, floats).slice();
-  draco._free(pointer);
-  pointer = draco._malloc(faces * 12);
-  decoder.GetTrianglesUInt32Array(mesh, faces * 12, pointer);
-  const indices = new Uint32Array(draco.HEAPU32.buffer, pointer, faces * 3).slice();
-  draco._free(pointer);
-  for (const object of [mesh, buffer, decoder]) draco.destroy(object);
-  return { positions, indices };
-}
 
 // The largest float32 model evaluation difference from the decoded frames, over every frame, relative to the diagonal.
 function modelDifference(stream, positions, indices, clips) {
@@ -97,7 +77,7 @@ for (const file of files) {
       for (const [p, primitive] of mesh.primitives.entries()) {
         const extension = primitive.extensions?.[NAME];
         if (!extension) continue;
-        const { positions, indices } = dracoBase(asset, primitive.extensions.KHR_draco_mesh_compression);
+        const { positions, indices } = dracoBase(draco, asset, primitive.extensions.KHR_draco_mesh_compression);
         const stream = viewBytes(asset, extension.bufferView);
         if (extension.morphTargets) {
           parts.push(SegmorphDecoder.decodeTargets(stream, positions, indices).deltas);
