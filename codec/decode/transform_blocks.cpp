@@ -1,6 +1,7 @@
 #include "decode/transform_blocks.h"
 
 #include <cassert>
+#include <cstring>
 
 #include "common/stream_format.h"
 
@@ -12,9 +13,19 @@ namespace {
 typedef double Lanes __attribute__((vector_size(64)));
 typedef float FloatLanes __attribute__((vector_size(32)));
 static_assert(sizeof(Lanes) == TransformBlocks::kMaxFrames * sizeof(double), "a lane per frame");
-// The lanes of a row of TransformBlocks' values from a frame on (at any double's alignment).
-typedef double RowLanes __attribute__((vector_size(64), aligned(8), may_alias));
-inline const RowLanes& at(const double* from) { return *reinterpret_cast<const RowLanes*>(from); }
+// The lanes of a row of TransformBlocks' values from a frame on, at any double's alignment: a memcpy, which GCC and
+// Clang make one unaligned load (Clang ignores a smaller alignment on a vector typedef and loads aligned: a fault).
+// Vectors by reference, never returned: a 64-byte vector's return would depend on the instruction set.
+__attribute__((always_inline)) inline void load(Lanes& to, const double* from) { std::memcpy(&to, from, sizeof(to)); }
+
+// sum = sum + weight × (t0 × x + t1 × y + t2 × z + t3), t0 .. t3 the rows at t, t + stride, ...: one row of 8.5's
+// prediction for one (cluster, weight) pair, in the spec's order.
+__attribute__((always_inline)) inline void add_row(Lanes& sum, const double* t, size_t stride, double x, double y,
+                                                   double z, double weight) {
+  Lanes t0, t1, t2, t3;
+  load(t0, t), load(t1, t + stride), load(t2, t + 2 * stride), load(t3, t + 3 * stride);
+  sum = sum + weight * (t0 * x + t1 * y + t2 * z + t3);
+}
 
 // The block's frames of every vertex: its prediction (spec 8.5: for each of its clusters, weight × (row · (x − c, 1)),
 // summed in the clusters' order), its residuals (8.7.1), their sum as floats, each lane stored into its frame.
@@ -29,18 +40,16 @@ __attribute__((always_inline)) inline void reconstruct_block(const TransformBloc
     Lanes px = {}, py = {}, pz = {};
     for (const TransformBlocks::Pair* end = d.pairs + vertex.pairs_end; pair < end; ++pair) {
       const double* t = lanes + pair->transform;
-      const double x = pair->x, y = pair->y, z = pair->z, weight = pair->weight;
-      px = px + weight * (at(t) * x + at(t + stride) * y + at(t + 2 * stride) * z + at(t + 3 * stride));
-      t += 4 * stride;
-      py = py + weight * (at(t) * x + at(t + stride) * y + at(t + 2 * stride) * z + at(t + 3 * stride));
-      t += 4 * stride;
-      pz = pz + weight * (at(t) * x + at(t + stride) * y + at(t + 2 * stride) * z + at(t + 3 * stride));
+      add_row(px, t, stride, pair->x, pair->y, pair->z, pair->weight);
+      add_row(py, t + 4 * stride, stride, pair->x, pair->y, pair->z, pair->weight);
+      add_row(pz, t + 8 * stride, stride, pair->x, pair->y, pair->z, pair->weight);
     }
     Lanes rx = {}, ry = {}, rz = {};
     const double* basis = lanes + vertex.basis;
     const double* c = vertex.coefficients;
     for (uint32_t i = 0, m = vertex.m; i < m; ++i) {
-      const Lanes b = at(basis + i * stride);
+      Lanes b;
+      load(b, basis + i * stride);
       rx = rx + c[i] * b;
       ry = ry + c[m + i] * b;
       rz = rz + c[2 * m + i] * b;
