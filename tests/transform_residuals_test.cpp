@@ -133,7 +133,7 @@ TEST(TransformResiduals, BlocksOfFramesAreTheReferenceFrames) {
     }
     using Instructions = TransformBlocks::Instructions;
     for (Instructions instructions : {Instructions::baseline, Instructions::avx, Instructions::avx512}) {
-      const TransformBlocks blocks(content, residuals, welded.data(), motion, weights, instructions);
+      const TransformBlocks blocks(content, residuals, welded.data(), motion.centroid, weights, instructions);
       if (blocks.instructions() != instructions) continue;  // the processor has not got them
       SCOPED_TRACE(int(instructions));
       std::vector<float> out(TransformBlocks::kMaxFrames * row);

@@ -60,7 +60,7 @@ std::vector<float> welded_base(const std::vector<float>& base, const StreamConte
   return welded;
 }
 
-AffineMotion dequantized_motion(const StreamContent& content, const std::vector<float>& welded) {
+AffineMotion dequantized_centroids(const StreamContent& content, const std::vector<float>& welded) {
   Clusters clusters;
   clusters.count = content.cluster_count;
   clusters.label = content.labels;
@@ -68,17 +68,17 @@ AffineMotion dequantized_motion(const StreamContent& content, const std::vector<
   motion.cluster_count = content.cluster_count;
   motion.frame_count = content.frame_count();
   motion.centroid = cluster_centroids(welded.data(), clusters);
+  return motion;
+}
+
+AffineMotion dequantized_motion(const StreamContent& content, const std::vector<float>& welded) {
+  AffineMotion motion = dequantized_centroids(content, welded);
   motion.transforms.resize(content.motion.size());
   const double linear = content.linear_step, translation = content.translation_step;
   for (size_t f = 0; f < motion.frame_count; ++f)
-    for (size_t k = 0; k < motion.cluster_count; ++k) {
-      const int32_t* q = &content.motion[(f * motion.cluster_count + k) * 12];
-      double* transform = motion.transform(f, k);
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) transform[r * 4 + c] = (r == c ? 1.0 : 0.0) + double(q[r * 3 + c]) * linear;
-        transform[r * 4 + 3] = motion.centroid[k * 3 + size_t(r)] + double(q[9 + r]) * translation;
-      }
-    }
+    for (size_t k = 0; k < motion.cluster_count; ++k)
+      dequantize_transform(&content.motion[(f * motion.cluster_count + k) * 12], &motion.centroid[k * 3], linear,
+                           translation, motion.transform(f, k));
   return motion;
 }
 

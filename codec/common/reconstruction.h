@@ -17,6 +17,20 @@ std::vector<float> welded_base(const std::vector<float>& base, const StreamConte
 // The affine motion the stream describes (centroids from the welded base and the labels).
 AffineMotion dequantized_motion(const StreamContent& content, const std::vector<float>& welded);
 
+// The same without its transforms (left empty), for a caller that keeps them in its own layout (version 4's frame
+// blocks, transform_blocks.h), each made by dequantize_transform.
+AffineMotion dequantized_centroids(const StreamContent& content, const std::vector<float>& welded);
+
+// One frame and cluster's transform, row-major [L | t], from its 12 motion integers q (content.motion), the
+// cluster's centroid c and the content's two steps: L = I + q × linear, t = c + q × translation (spec 8.3).
+inline void dequantize_transform(const int32_t* q, const double* c, double linear, double translation,
+                                 double* transform) {
+  for (int r = 0; r < 3; ++r) {
+    for (int j = 0; j < 3; ++j) transform[r * 4 + j] = (r == j ? 1.0 : 0.0) + double(q[r * 3 + j]) * linear;
+    transform[r * 4 + 3] = c[r] + double(q[9 + r]) * translation;
+  }
+}
+
 // The cluster weights the stream describes.
 ClusterWeights dequantized_weights(const StreamContent& content);
 

@@ -46,7 +46,7 @@ FrameLoop::FrameLoop(const StreamContent& content, const std::vector<float>& bas
                      const std::vector<uint32_t>& triangles)
     : content_(content),
       welded_(welded_base(base, content)),
-      motion_(dequantized_motion(content, welded_)),
+      motion_(content.transform ? dequantized_centroids(content, welded_) : dequantized_motion(content, welded_)),
       weights_(dequantized_weights(content)),
       traversal_(residual_traversal(content, triangles)),
       row_(size_t(content.welded_count) * 3),
@@ -63,7 +63,7 @@ FrameLoop::FrameLoop(const StreamContent& content, const std::vector<float>& bas
   status_ = transform_coefficients(content, traversal_, coefficients);
   if (!status_.ok()) return;
   transform_ = std::make_unique<TransformResiduals>(content, std::move(coefficients));
-  blocks_ = std::make_unique<TransformBlocks>(content, *transform_, welded_.data(), motion_, weights_);
+  blocks_ = std::make_unique<TransformBlocks>(content, *transform_, welded_.data(), motion_.centroid, weights_);
   welded_frames_.resize(TransformBlocks::kMaxFrames * row_);
 }
 

@@ -36,11 +36,13 @@ class FrameLoop {
   const Status& status() const { return status_; }
 
   // What the loop reconstructs from (the playback model, playback_model.h, reads them): the welded base (W × 3), the
-  // dequantized motion and weights, and in version 4 the residuals' coefficients and bases (null in versions 1-3).
+  // dequantized motion and weights, and in version 4 the residuals' coefficients and bases and the blocks (null in
+  // versions 1-3). Version 4's motion has its centroids only: its transforms are the blocks' (blocks()->transform).
   const std::vector<float>& welded() const { return welded_; }
   const AffineMotion& motion() const { return motion_; }
   const ClusterWeights& weights() const { return weights_; }
   const TransformResiduals* transform() const { return transform_.get(); }
+  const TransformBlocks* blocks() const { return blocks_.get(); }
 
   // Starts a clip: its first frame has no reference.
   void start_clip();

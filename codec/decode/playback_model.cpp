@@ -69,24 +69,25 @@ PlaybackModel playback_model(const StreamContent& content, const FrameLoop& loop
 }
 
 void playback_motion(const FrameLoop& loop, size_t first, size_t count, float* out) {
-  const AffineMotion& motion = loop.motion();
-  const double* from = motion.transform(first, 0);
-  for (size_t i = 0, n = count * motion.cluster_count * 12; i < n; ++i) out[i] = float(from[i]);
+  const TransformBlocks& blocks = *loop.blocks();
+  const size_t clusters = loop.motion().cluster_count;
+  for (size_t f = first; f < first + count; ++f)
+    for (size_t k = 0; k < clusters; ++k)
+      for (size_t j = 0; j < 12; ++j) *out++ = float(blocks.transform(k, j)[f]);
 }
 
 void playback_basis(const PlaybackModel& model, const StreamContent& content, const FrameLoop& loop, size_t first,
                     size_t count, float* out) {
   const TransformResiduals& transform = *loop.transform();
-  const size_t G = content.stream_basis.size();
+  const size_t stride = transform.stride();
   for (size_t f = first; f < first + count; ++f, out += model.basis_count) {
-    const double* stream = transform.stream_values().data() + f * G;
-    for (size_t i = 0; i < model.stream_vectors; ++i) out[i] = float(stream[i]);
+    for (size_t i = 0; i < model.stream_vectors; ++i) out[i] = float(transform.stream_basis()[i * stride + f]);
     for (size_t k = 0; k < model.cluster_count; ++k) {
       if (content.basis_source[k] != format::kBasisOwn) continue;
       const size_t m = content.basis_size[k];
-      const double* own = transform.own_values(k).data() + f * m;
+      const double* own = transform.basis(k) + f;
       float* to = out + model.cluster_basis[k * 2];
-      for (size_t i = 0; i < m; ++i) to[i] = float(own[i]);
+      for (size_t i = 0; i < m; ++i) to[i] = float(own[i * stride]);
     }
   }
 }

@@ -3,6 +3,7 @@
 #include <cassert>
 #include <cstring>
 
+#include "common/reconstruction.h"
 #include "common/stream_format.h"
 
 namespace segmorph {
@@ -33,23 +34,21 @@ __attribute__((always_inline)) inline void add_row(Lanes& sum, const double* t, 
 __attribute__((always_inline)) inline void reconstruct_block(const TransformBlocks::Data& d, size_t frame,
                                                              size_t count, float* out) {
   const size_t stride = d.stride, row = d.vertex_count * 3;
-  const double* lanes = d.lanes + frame;
   const TransformBlocks::Pair* pair = d.pairs;
   for (size_t w = 0; w < d.vertex_count; ++w) {
     const TransformBlocks::Vertex& vertex = d.vertices[w];
     Lanes px = {}, py = {}, pz = {};
     for (const TransformBlocks::Pair* end = d.pairs + vertex.pairs_end; pair < end; ++pair) {
-      const double* t = lanes + pair->transform;
+      const double* t = pair->transform + frame;
       add_row(px, t, stride, pair->x, pair->y, pair->z, pair->weight);
       add_row(py, t + 4 * stride, stride, pair->x, pair->y, pair->z, pair->weight);
       add_row(pz, t + 8 * stride, stride, pair->x, pair->y, pair->z, pair->weight);
     }
     Lanes rx = {}, ry = {}, rz = {};
-    const double* basis = lanes + vertex.basis;
     const double* c = vertex.coefficients;
-    for (uint32_t i = 0, m = vertex.m; i < m; ++i) {
+    for (uint32_t i = 0, m = vertex.m; i < m; ++i) {  // (no basis, no pointer: m is 0)
       Lanes b;
-      load(b, basis + i * stride);
+      load(b, vertex.basis + (i * stride + frame));
       rx = rx + c[i] * b;
       ry = ry + c[m + i] * b;
       rz = rz + c[2 * m + i] * b;
@@ -98,28 +97,20 @@ TransformBlocks::Instructions available(TransformBlocks::Instructions wanted) {
 }  // namespace
 
 TransformBlocks::TransformBlocks(const StreamContent& content, const TransformResiduals& residuals,
-                                 const float* welded, const AffineMotion& motion, const ClusterWeights& weights,
-                                 Instructions instructions)
-    : stride_(content.frame_count() + kMaxFrames), instructions_(available(instructions)) {
+                                 const float* welded, const std::vector<double>& centroid,
+                                 const ClusterWeights& weights, Instructions instructions)
+    : stride_(residuals.stride()), instructions_(available(instructions)) {
+  static_assert(TransformResiduals::kRowPadding >= kMaxFrames - 1, "a block reads up to kMaxFrames − 1 past a row");
   const size_t frames = content.frame_count(), clusters = content.cluster_count;
-  // Where each basis and each cluster's transforms start in lanes_ (in rows).
-  size_t rows = content.stream_basis.size();
-  std::vector<size_t> basis_row(clusters, 0), transform_row(clusters);
-  for (size_t k = 0; k < clusters; ++k)
-    if (content.basis_source[k] == format::kBasisOwn) basis_row[k] = rows, rows += content.basis_size[k];
-  for (size_t k = 0; k < clusters; ++k) transform_row[k] = rows, rows += 12;
-  lanes_.assign(rows * stride_, 0.0);
-  auto put_basis = [&](const StreamContent::Basis& basis, size_t vectors, size_t first_row) {
-    for (size_t i = 0; i < vectors; ++i)
-      for (size_t f = 0; f < frames; ++f)
-        lanes_[(first_row + i) * stride_ + f] = double(basis.entries[i * frames + f]) * double(basis.step[i]);
-  };
-  put_basis(content.stream_basis, content.stream_basis.size(), 0);
-  for (size_t k = 0; k < clusters; ++k)
-    if (content.basis_source[k] == format::kBasisOwn) put_basis(content.own_basis[k], content.basis_size[k], basis_row[k]);
-  for (size_t k = 0; k < clusters; ++k)
-    for (size_t f = 0; f < frames; ++f)
-      for (size_t j = 0; j < 12; ++j) lanes_[(transform_row[k] + j) * stride_ + f] = motion.transform(f, k)[j];
+  assert(stride_ == frames + TransformResiduals::kRowPadding && centroid.size() == clusters * 3);
+  motion_.assign(clusters * 12 * stride_, 0.0);
+  const double linear = content.linear_step, translation = content.translation_step;
+  for (size_t f = 0; f < frames; ++f)
+    for (size_t k = 0; k < clusters; ++k) {
+      double transform[12];
+      dequantize_transform(&content.motion[(f * clusters + k) * 12], &centroid[k * 3], linear, translation, transform);
+      for (size_t j = 0; j < 12; ++j) motion_[(k * 12 + j) * stride_ + f] = transform[j];
+    }
 
   const size_t vertex_count = content.welded_count;
   assert(weights.offset.size() == vertex_count + 1);
@@ -129,18 +120,18 @@ TransformBlocks::TransformBlocks(const StreamContent& content, const TransformRe
     const uint32_t k = content.labels[w];
     for (uint32_t i = weights.offset[w]; i < weights.offset[w + 1]; ++i) {
       const uint32_t cluster = weights.cluster[i];
-      const double* c = &motion.centroid[size_t(cluster) * 3];
+      const double* c = &centroid[size_t(cluster) * 3];
       pairs_.push_back(Pair{double(welded[w * 3]) - c[0], double(welded[w * 3 + 1]) - c[1],
-                            double(welded[w * 3 + 2]) - c[2], weights.weight[i], transform_row[cluster] * stride_});
+                            double(welded[w * 3 + 2]) - c[2], weights.weight[i], transform(cluster, 0)});
     }
-    vertices_[w] = Vertex{basis_row[k] * stride_, residuals.scaled().data() + residuals.offsets()[w],
+    vertices_[w] = Vertex{residuals.basis(k), residuals.scaled().data() + residuals.offsets()[w],
                           content.basis_size[k], uint32_t(pairs_.size())};
   }
 }
 
 void TransformBlocks::reconstruct(size_t frame, size_t count, float* out) const {
   assert(count >= 1 && count <= kMaxFrames);
-  const Data data{lanes_.data(), stride_, vertices_.data(), vertices_.size(), pairs_.data()};
+  const Data data{stride_, vertices_.data(), vertices_.size(), pairs_.data()};
 #if defined(__x86_64__) || defined(__i386__)
   if (instructions_ == Instructions::avx512) return reconstruct_avx512(data, frame, count, out);
   if (instructions_ == Instructions::avx) return reconstruct_avx(data, frame, count, out);

@@ -25,40 +25,44 @@ class TransformBlocks {
   // has: asking for AVX-512 on a processor without it gives AVX or SSE2).
   enum class Instructions { best, avx512, avx, baseline };
 
-  // welded: W × 3 (the welded base); content, residuals, motion and weights must outlive the blocks.
+  // welded: W × 3 (the welded base); centroid: K × 3 (AffineMotion::centroid). The blocks dequantize the content's
+  // motion themselves (dequantize_transform, the doubles of dequantized_motion) into their own layout and read the
+  // bases where residuals keeps them; content and residuals must outlive the blocks.
   TransformBlocks(const StreamContent& content, const TransformResiduals& residuals, const float* welded,
-                  const AffineMotion& motion, const ClusterWeights& weights,
+                  const std::vector<double>& centroid, const ClusterWeights& weights,
                   Instructions instructions = Instructions::best);
 
   // Welded frames `frame` .. `frame` + count − 1 (count 1 .. kMaxFrames, all < the stream's frame count) into out,
   // frame after frame (W × 3 floats each).
   void reconstruct(size_t frame, size_t count, float* out) const;
 
+  // Cluster k's transform in frame f (row-major [L | t], as AffineMotion::transform): coefficient j is
+  // transform(k, j)[f].
+  const double* transform(size_t cluster, size_t j) const { return &motion_[(cluster * 12 + j) * stride_]; }
+
   Instructions instructions() const { return instructions_; }
 
   // What the kernels read (public for the kernel functions in the .cpp file).
   struct Pair {  // a vertex's cluster and weight (ClusterWeights), with the vertex's base position less the centroid
     double x, y, z, weight;
-    size_t transform;  // where the cluster's transforms start in lanes
+    const double* transform;  // the cluster's 12 transform rows (motion_)
   };
   struct Vertex {
-    size_t basis;        // where the cluster's basis starts in lanes
+    const double* basis;         // the first of its cluster's basis rows (TransformResiduals::basis)
     const double* coefficients;  // the vertex's m × 3 scaled coefficients (TransformResiduals::scaled)
     uint32_t m, pairs_end;       // the basis size; the end of its pairs in pairs_
   };
   struct Data {
-    const double* lanes;
-    size_t stride;  // from one row of lanes to the next: the frame count plus kMaxFrames of zeros
+    size_t stride;  // from one row to the next (motion's and the bases'): the frame count plus kMaxFrames of zeros
     const Vertex* vertices;
     size_t vertex_count;
     const Pair* pairs;
   };
 
  private:
-  // The per-frame values, vector-major so that a block's frames are side by side: each basis vector's values
-  // (double(entry) × double(step), as TransformResiduals has them), each cluster's 12 transform coefficients (row-major
-  // [L | t]) frame by frame, every row `stride` long.
-  std::vector<double> lanes_;
+  // The motion vector-major, so that a block's frames are side by side: each cluster's 12 transform coefficients
+  // (row-major [L | t]), a row each, frame after frame, every row `stride_` long (the bases' rows are as long).
+  std::vector<double> motion_;
   size_t stride_;
   std::vector<Vertex> vertices_;
   std::vector<Pair> pairs_;

@@ -36,6 +36,10 @@ Status transform_coefficients(const StreamContent& content, const ResidualTraver
 // coefficients over and keeps their offsets and their products with the steps (8 bytes each), not their indices.
 class TransformResiduals {
  public:
+  // Zero doubles after each basis vector's F values, so that a block of frames (transform_blocks.h) may load a
+  // vector's values from any frame on, past its last.
+  static constexpr size_t kRowPadding = 8;
+
   TransformResiduals(const StreamContent& content, TransformCoefficients coefficients);
 
   // Frame `frame`'s residuals, W × 3 doubles (vertex w, axis a at w × 3 + a): for each, r = 0.0, then for i = 0 ..
@@ -44,22 +48,24 @@ class TransformResiduals {
   // the same doubles a block of frames at a time (transform_blocks.h).
   void frame(size_t frame, double* out) const;
 
-  // What frame() reads. Vertex w's scaled coefficients are scaled()[offsets()[w] + a × m + i] (axis a, vector i);
-  // the stream's basis value of vector i in frame f is stream_values()[f × G + i] (G its vectors), cluster k's own
-  // (kBasisOwn) own_values(k)[f × m + i].
+  // What frame() reads. Vertex w's scaled coefficients are scaled()[offsets()[w] + a × m + i] (axis a, vector i).
+  // The bases vector by vector, each vector's values frame after frame (the layout the blocks read): cluster k's
+  // vector i in frame f is basis(k)[i × stride() + f] (the stream's basis, or its own; null without a basis), and
+  // the stream's vector i is stream_basis()[i × stride() + f].
   const std::vector<uint64_t>& offsets() const { return offset_; }
   const std::vector<double>& scaled() const { return scaled_; }
-  const std::vector<double>& stream_values() const { return stream_; }
-  const std::vector<double>& own_values(size_t cluster) const { return own_[cluster]; }
+  size_t stride() const { return stride_; }
+  const double* stream_basis() const { return rows_.data(); }
+  const double* basis(size_t cluster) const;
 
  private:
   const StreamContent& content_;
   std::vector<uint64_t> offset_;  // TransformCoefficients::offset
-  size_t frames_;
-  // The bases' values frame by frame: the stream's F × G (frame f's at stream_[f × G ..]), each own cluster's F × m.
-  std::vector<double> stream_;
-  std::vector<std::vector<double>> own_;
-  std::vector<double> scaled_;  // double(q) × double(D) of every coefficient, laid out by offset_
+  size_t stride_;                 // F + kRowPadding
+  // Every basis vector's values, a row of stride_ each: the stream's G vectors, then each own cluster's m.
+  std::vector<double> rows_;
+  std::vector<size_t> own_row_;  // K: the first row of a cluster's own basis
+  std::vector<double> scaled_;   // double(q) × double(D) of every coefficient, laid out by offset_
 };
 
 }  // namespace segmorph
