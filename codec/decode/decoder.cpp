@@ -178,7 +178,7 @@ void FrameDecoder::take_checkpoint() {
   checkpoints_[clip_] = std::move(checkpoint);
 }
 
-Status FrameDecoder::before_decode(size_t count) {
+Status FrameDecoder::check_frames(size_t count) const {
   assert(is_open());
   if (!failure_.ok()) return failure_;
   const size_t left = frames_left_in_clip();
@@ -186,6 +186,11 @@ Status FrameDecoder::before_decode(size_t count) {
   if (count > left)
     return Status(StatusCode::invalid_argument, std::to_string(count) + " frames asked for where the clip has " +
                                                     std::to_string(left) + " left");
+  return Status::Ok();
+}
+
+Status FrameDecoder::before_decode(size_t count) {
+  SEGMORPH_RETURN_IF_ERROR(check_frames(count));
   if (count == 0 || count > loop_->block_frames())
     return Status(StatusCode::invalid_argument, "frames are decoded 1 to " + std::to_string(loop_->block_frames()) +
                                                     " at a time, not " + std::to_string(count));
@@ -230,10 +235,7 @@ Status FrameDecoder::decode_frames(size_t count, float* out, size_t threads) {
   const size_t blocks = (count + block - 1) / block;
   threads = std::min(thread_count(threads), blocks);
   if (threads > 1 && content_.transform) {
-    if (!failure_.ok()) return failure_;
-    if (count > frames_left_in_clip())
-      return Status(StatusCode::invalid_argument, std::to_string(count) + " frames asked for where the clip has " +
-                                                      std::to_string(frames_left_in_clip()) + " left");
+    SEGMORPH_RETURN_IF_ERROR(check_frames(count));
     // Version 4: the blocks in ranges, one a thread, each with its own room for the welded frames; the first failing
     // block's status (in frame order) is the result, as one thread would report it.
     std::vector<Status> failed(blocks);

@@ -167,7 +167,6 @@ Status AnimationDecoder::seek(size_t clip) {
   if (clip >= clip_count())
     return invalid("no clip " + std::to_string(clip) + " (the stream has " + std::to_string(clip_count()) + ")");
   State& state = *state_;
-  if (state.has_pending() && state.pending_clip == clip && state.pending_frame == 0) return Status::Ok();
   state.pending_count = 0;
   return guarded([&] { return state.decoder.seek(clip); });
 }

@@ -135,6 +135,9 @@ class FrameDecoder {
   size_t frame_bound() const { return frame_bound_; }
 
  private:
+  // The sticky failure, or invalid_argument unless `count` frames are left in the clip (any count: the caller checks
+  // the block size where it applies).
+  Status check_frames(size_t count) const;
   Status before_decode(size_t count);
   Status after_decode(Status status, size_t count);
   void take_checkpoint();
