@@ -3,12 +3,18 @@
 // FILE: files `segmorph encode` wrote. Each compressed primitive's stream (not the kept-morph-target ones) and its
 // Draco base mesh are extracted (Draco's own JavaScript decoder, as a page has it), then decoded
 // - natively: BUILD/bench/decode_speed, the C API on one thread and on every hardware thread (set_threads: a
-//   version-4 stream's frames), open then every clip into memory allocated first;
-// - in Node.js's WebAssembly: BUILD/web/segmorph_decoder.js, SegmorphDecoder.decodeStream (the stream and the base
-//   copied into the module's memory, open, every clip, each clip copied out), once with the SIMD module and once
-//   with the one without (SEGMORPH_WASM), each in a process of its own.
+//   version-4 stream's frames), open then every clip into memory allocated first; on one thread again with glibc
+//   keeping the memory the decoder frees (GLIBC_TUNABLES: no trim, no mmap), so that each open does not fault its
+//   working memory in afresh, as WebAssembly's memory, which never shrinks, does not: the WebAssembly figures are
+//   given as fractions of that one, the faster;
+// - in Node.js's WebAssembly: BUILD/web/segmorph_decoder.js, once with the SIMD module and once with the one without
+//   (SEGMORPH_WASM), each in a process of its own, two ways in turn: as the native decoder (createStreamDecoder, then
+//   decodeClip of every clip into arrays allocated first: the stream and the base copied into the module's memory,
+//   open, each clip decoded and copied out), and SegmorphDecoder.decodeStream (the same into fresh arrays each call,
+//   as a page that loads a file once pays them).
 // N runs each (default 9) after one not counted; the median. Prints a Markdown table: millions of vertex-frames per
-// second and each WebAssembly module's speed as a fraction of the native one. Release build; an idle machine.
+// second and each WebAssembly figure as a fraction of the native one with freed memory kept. Release build; an idle
+// machine.
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { createRequire } from 'node:module';
@@ -37,16 +43,27 @@ if (args[0] === '--child') {
   const base = read('base.f32'), indices = read('indices.u32');
   const positions = new Float32Array(base.buffer, base.byteOffset, base.byteLength / 4);
   const triangles = new Uint32Array(indices.buffer, indices.byteOffset, indices.byteLength / 4);
-  const times = [];
-  let vertexFrames = 0;
+  const kept = [], fresh = [];
+  let vertexFrames = 0, targets = null;
   for (let run = 0; run <= runs; ++run) {
-    const start = performance.now();
+    let start = performance.now();
+    const decoder = SegmorphDecoder.createStreamDecoder(stream, positions, triangles);
+    targets ??= Array.from({ length: decoder.clipCount },
+                           (_, c) => new Float32Array(decoder.frameCount(c) * decoder.vertexCount * 3));
+    for (let c = 0; c < decoder.clipCount; ++c) decoder.decodeClip(c, targets[c]);
+    decoder.dispose();
+    let end = performance.now();
+    if (run > 0) kept.push(end - start);
+    start = performance.now();
     const { clips } = SegmorphDecoder.decodeStream(stream, positions, triangles);
-    const end = performance.now();
-    if (run > 0) times.push(end - start);
+    end = performance.now();
+    if (run > 0) fresh.push(end - start);
     vertexFrames = clips.reduce((sum, clip) => sum + clip.frames.length / 3, 0);
+    if (clips.some((clip, c) => clip.frames.length !== targets[c].length || clip.frames.some((x, i) => !Object.is(x, targets[c][i]))))
+      throw new Error('wasm_speed: decodeClip and decodeStream differ');
   }
-  console.log(JSON.stringify({ module: SegmorphDecoder.module, vertex_frames: vertexFrames, median_ms: median(times) }));
+  console.log(JSON.stringify({ module: SegmorphDecoder.module, vertex_frames: vertexFrames, median_ms: median(kept),
+                               fresh_ms: median(fresh) }));
   process.exit(0);
 }
 
@@ -77,6 +94,8 @@ try {
         writeFileSync(path.join(directory, 'base.f32'), positions);
         writeFileSync(path.join(directory, 'indices.u32'), indices);
         const nativeRun = JSON.parse(execFileSync(native, [directory, '--runs', `${runs}`], { encoding: 'utf8' }));
+        const keptRun = JSON.parse(execFileSync(native, [directory, '--runs', `${runs}`], { encoding: 'utf8',
+          env: { ...process.env, GLIBC_TUNABLES: 'glibc.malloc.trim_threshold=4000000000:glibc.malloc.mmap_threshold=4000000000' } }));
         const threadsRun = JSON.parse(execFileSync(native, [directory, '--runs', `${runs}`, '--threads', '0'],
                                                    { encoding: 'utf8' }));
         const wasmRun = (module) => JSON.parse(execFileSync(process.execPath,
@@ -86,22 +105,26 @@ try {
         if (simd.module !== 'simd' || baseline.module !== 'baseline') throw new Error('wasm_speed: the wrong module loaded');
         const version = viewBytes(asset, extension.bufferView)[4];
         rows.push({ file: path.basename(file), primitive: `${m}/${p}`, version, vertexCount: positions.length / 3,
-                    vertexFrames: nativeRun.vertex_frames, native: nativeRun.median_ms, threads: threadsRun.median_ms,
-                    simd: simd.median_ms,
-                    baseline: baseline.median_ms });
+                    vertexFrames: nativeRun.vertex_frames, fresh: nativeRun.median_ms, native: keptRun.median_ms,
+                    threads: threadsRun.median_ms,
+                    simd: simd.median_ms, simdFresh: simd.fresh_ms,
+                    baseline: baseline.median_ms, baselineFresh: baseline.fresh_ms });
       }
   }
 } finally {
   rmSync(work, { recursive: true, force: true });
 }
 const rate = (vertexFrames, ms) => (vertexFrames / ms / 1e3).toFixed(1);
+const cell = (r, ms) => `${rate(r.vertexFrames, ms)} (${ms.toFixed(2)}), ${(r.native / ms).toFixed(2)}`;
 console.log(`| file | mesh/primitive | stream version | V | vertex-frames | native, one thread: M vf/s (ms) | ` +
+            `native, one thread, freed memory kept | ` +
             `native, ${os.availableParallelism?.() ?? os.cpus().length} threads | ` +
-            `WebAssembly SIMD M vf/s (ms), of native | WebAssembly without SIMD M vf/s (ms), of native |`);
-console.log('|---|---|---|---|---|---|---|---|---|');
+            `WebAssembly SIMD M vf/s (ms), of native | without SIMD | SIMD, decodeStream (fresh arrays) | ` +
+            `without SIMD, decodeStream |`);
+console.log('|---|---|---|---|---|---|---|---|---|---|---|---|');
 for (const r of rows)
   console.log(`| ${r.file} | ${r.primitive} | ${r.version} | ${r.vertexCount} | ${r.vertexFrames} | ` +
+              `${rate(r.vertexFrames, r.fresh)} (${r.fresh.toFixed(2)}) | ` +
               `${rate(r.vertexFrames, r.native)} (${r.native.toFixed(2)}) | ` +
               `${rate(r.vertexFrames, r.threads)} (${r.threads.toFixed(2)}) | ` +
-              `${rate(r.vertexFrames, r.simd)} (${r.simd.toFixed(2)}), ${(r.native / r.simd).toFixed(2)} | ` +
-              `${rate(r.vertexFrames, r.baseline)} (${r.baseline.toFixed(2)}), ${(r.native / r.baseline).toFixed(2)} |`);
+              `${cell(r, r.simd)} | ${cell(r, r.baseline)} | ${cell(r, r.simdFresh)} | ${cell(r, r.baselineFresh)} |`);

@@ -407,6 +407,25 @@ class StreamDecoder {
     return out;
   }
 
+  // Every frame of `clip` into `target` (a Float32Array of frameCount(clip) × vertex count × 3; a new one when
+  // absent), which it returns: as decodeStream's clip, without a fresh array per call for a caller that keeps its own
+  // (as MeshoptDecoder decodes into the caller's target). Afterwards the decoder is at the next clip's first frame.
+  decodeClip(clip, target) {
+    if (!(clip >= 0 && clip < this.clipCount)) throw new RangeError(`segmorph: no clip ${clip} (the stream has ${this.clipCount})`);
+    const floats = wasm.segmorph_decode_clip_bound(this._decoder, clip);
+    const out = target ?? new Float32Array(floats);
+    if (!(out instanceof Float32Array) || out.length < floats)
+      throw new RangeError(`segmorph: clip ${clip} needs a Float32Array of ${floats} floats`);
+    const room = allocate(floats * 4);
+    try {
+      this._check(wasm.segmorph_decode_clip(this._decoder, clip, room, floats), `clip ${clip}`);
+      out.set(new Float32Array(wasm.memory.buffer, room, floats));
+    } finally {
+      wasm.segmorph_wasm_free(room);
+    }
+    return out;
+  }
+
   // With the base normals given at creation: the normals of the shape `positions` (V × 3; a decoded frame, or a blend
   // of two) into `target` (a new Float32Array when absent), which it returns: turned as segmorph decode turns them.
   turnNormals(positions, target) {

@@ -67,6 +67,34 @@ function modelDifference(stream, positions, indices, clips) {
   }
 }
 
+// StreamDecoder.decodeClip: every clip, last first (a seek back each time), into arrays of the caller's (one a
+// frame too long, whose last floats it must leave alone) gives decodeStream's frames; a bad clip or a short array
+// is refused.
+function checkDecodeClip(stream, positions, indices, clips) {
+  const decoder = SegmorphDecoder.createStreamDecoder(stream, positions, indices);
+  try {
+    const frame = decoder.vertexCount * 3;
+    for (let c = clips.length - 1; c >= 0; --c) {
+      const target = new Float32Array(clips[c].frames.length + frame).fill(-7);
+      if (decoder.decodeClip(c, target) !== target) throw new Error(`decodeClip(${c}) did not return its target`);
+      const decoded = target.subarray(0, clips[c].frames.length);
+      if (!Buffer.from(decoded.buffer, 0, decoded.byteLength).equals(Buffer.from(clips[c].frames.buffer, clips[c].frames.byteOffset, clips[c].frames.byteLength)))
+        throw new Error(`decodeClip(${c}) differs from decodeStream's clip`);
+      if (!target.subarray(clips[c].frames.length).every((x) => x === -7)) throw new Error(`decodeClip(${c}) wrote past its clip`);
+    }
+    if (!Buffer.from(decoder.decodeClip(0).buffer).equals(Buffer.from(clips[0].frames.buffer, clips[0].frames.byteOffset, clips[0].frames.byteLength)))
+      throw new Error('decodeClip(0) into a new array differs');
+    const refused = (what, call) => {
+      try { call(); } catch (error) { if (error instanceof RangeError) return; throw error; }
+      throw new Error(`decodeClip took ${what}`);
+    };
+    refused('a clip past the last', () => decoder.decodeClip(clips.length));
+    refused('an array a float short', () => decoder.decodeClip(0, new Float32Array(clips[0].frames.length - 1)));
+  } finally {
+    decoder.dispose();
+  }
+}
+
 let failures = 0, compared = 0, floats = 0, models = 0, modelLargest = 0;
 for (const file of files) {
   const name = path.basename(file);
@@ -84,6 +112,7 @@ for (const file of files) {
         } else {
           const decodedStream = SegmorphDecoder.decodeStream(stream, positions, indices);
           for (const clip of decodedStream.clips) parts.push(clip.frames);
+          checkDecodeClip(stream, positions, indices, decodedStream.clips);
           const difference = modelDifference(stream, positions, indices, decodedStream.clips);
           if ((difference === null) !== (decodedStream.version < 4))
             throw new Error(`mesh ${m} primitive ${p}: a version-${decodedStream.version} stream ${difference === null ? 'has no' : 'has a'} model`);
