@@ -33,13 +33,18 @@ TEST(AutomaticClusters, ChoosesACountTheSegmentationHas) {
   EXPECT_LT(chosen, stage.segmentations.size());
   EXPECT_GE(clusters.count, 1u);
   EXPECT_LE(clusters.count, stage.segmentations[chosen].count);  // merged down, never split
-  // The same choice again, and on any number of threads.
-  CodecSettings two_threads;
-  two_threads.threads = 2;
-  StageProblem again(24, two_threads);
-  const Clusters twice = choose_clusters(again.problem, again.segmentations, again.content);
-  EXPECT_EQ(twice.label, clusters.label);
-  EXPECT_EQ(again.content.flags, stage.content.flags);
+  // The same choice again, and on any number of threads (the segmentations and the candidate counts are tried
+  // several at a time on more than one).
+  for (size_t threads : {1, 2, 3, 5}) {
+    CodecSettings settings;
+    settings.threads = threads;
+    StageProblem again(24, settings);
+    size_t again_chosen = 99;
+    const Clusters twice = choose_clusters(again.problem, again.segmentations, again.content, &again_chosen);
+    EXPECT_EQ(twice.label, clusters.label) << threads << " threads";
+    EXPECT_EQ(again_chosen, chosen) << threads << " threads";
+    EXPECT_EQ(again.content.flags, stage.content.flags) << threads << " threads";
+  }
 }
 
 // The residual predictions are kept only where they pay: the flags after the choice are among those asked for.

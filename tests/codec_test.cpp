@@ -5,13 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <utility>
 
+#include "common/parallel.h"
 #include "common/stream.h"
 #include "common/stream_format.h"
 #include "decode/stream_reader.h"
@@ -51,6 +54,46 @@ TEST(Codec, DecodingGivesTheEncodersReconstructionExactly) {
   EXPECT_EQ(decoded[0].positions, encoded.reconstruction[0].positions);
   EXPECT_LE(kg(clips, decoded), 0.5);
   EXPECT_GT(encoded.report.clusters, 1u);
+}
+
+// parallel_items (common/parallel.h): every item exactly once, item 0 on the calling thread, for any item and thread
+// count; an item's exception comes back after every thread has finished (on one thread: the first failing item's,
+// and no item after it starts).
+TEST(Parallel, ItemsRunOnceEachTheFirstOnTheCallingThread) {
+  for (size_t count : {0, 1, 2, 5, 100})
+    for (size_t threads : {1, 2, 3, 8}) {
+      SCOPED_TRACE(std::to_string(count) + " items, " + std::to_string(threads) + " threads");
+      std::vector<std::atomic<int>> runs(count);
+      std::thread::id first;
+      parallel_items(count, threads, [&](size_t i) {
+        if (i == 0) first = std::this_thread::get_id();
+        runs[i] += 1;
+      });
+      for (size_t i = 0; i < count; ++i) EXPECT_EQ(runs[i].load(), 1) << "item " << i;
+      if (count > 0) {
+        EXPECT_EQ(first, std::this_thread::get_id());
+      }
+    }
+}
+
+TEST(Parallel, AnItemsExceptionComesBack) {
+  for (size_t threads : {1, 4}) {
+    std::vector<std::atomic<int>> runs(40);
+    try {
+      parallel_items(40, threads, [&](size_t i) {
+        runs[i] += 1;
+        if (i == 3 || i == 7) throw std::runtime_error("item " + std::to_string(i));
+      });
+      ADD_FAILURE() << "no exception";
+    } catch (const std::runtime_error& error) {
+      if (threads == 1) {
+        EXPECT_STREQ(error.what(), "item 3");
+        for (size_t i = 4; i < runs.size(); ++i) EXPECT_EQ(runs[i].load(), 0) << "item " << i << " ran after item 3 failed";
+      } else {
+        EXPECT_TRUE(std::string(error.what()) == "item 3" || std::string(error.what()) == "item 7") << error.what();
+      }
+    }
+  }
 }
 
 TEST(Codec, TwoEncodesAreByteIdentical) {

@@ -5,8 +5,10 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <exception>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -41,6 +43,44 @@ void parallel_ranges(size_t count, size_t threads, Body&& body) {
   workers.reserve(ranges - 1);
   for (size_t r = 1; r < ranges; ++r) workers.emplace_back(run, r);
   run(0);
+  for (std::thread& worker : workers) worker.join();
+  for (const std::exception_ptr& error : errors)
+    if (error) std::rethrow_exception(error);
+}
+
+// Calls body(i) for every i in [0, count), the items handed out one at a time, in order, to up to `threads` threads
+// as each finishes its last (item 0 on the calling thread, which may report progress from it): for items of unequal
+// cost, which ranges would leave some threads idle behind others. What an item computes must depend on the item alone (results kept per item): the output
+// is then the same for every thread count and every order in which they finish. A thread that cannot be started
+// leaves its share to the others. An exception in an item stops the handing out; the lowest failed item's exception
+// is rethrown here after every thread has finished.
+template <typename Body>
+void parallel_items(size_t count, size_t threads, Body&& body) {
+  const size_t wanted = std::min(std::max<size_t>(threads, 1), count);
+  std::atomic<size_t> next{1};  // item 0 is the calling thread's
+  std::atomic<bool> failed{false};
+  std::vector<std::exception_ptr> errors(count);
+  auto item = [&](size_t i) {
+    try {
+      body(i);
+    } catch (...) {
+      errors[i] = std::current_exception();
+      failed = true;
+    }
+  };
+  auto run = [&] {
+    for (size_t i; !failed.load(std::memory_order_relaxed) && (i = next.fetch_add(1)) < count;) item(i);
+  };
+  std::vector<std::thread> workers;
+  if (wanted > 1) {
+    workers.reserve(wanted - 1);
+    try {
+      for (size_t t = 1; t < wanted; ++t) workers.emplace_back(run);
+    } catch (const std::system_error&) {  // no more threads: those started and this one share the items
+    }
+  }
+  if (count > 0) item(0);
+  run();
   for (std::thread& worker : workers) worker.join();
   for (const std::exception_ptr& error : errors)
     if (error) std::rethrow_exception(error);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "common/parallel.h"
 #include "common/stream_format.h"
 #include "encode/motion_quantization.h"
 #include "encode/rate_distortion.h"
@@ -20,6 +21,9 @@ namespace {
 constexpr size_t kVerticesPerCluster = 24;
 constexpr size_t kMaxClusters = 256;
 constexpr size_t kMinAutomaticClusters = 4;
+// The most candidates tried at once (each holds its own trial stream and predictions): the search mostly stops a few
+// candidates in, so more would mostly try counts it never reaches.
+constexpr size_t kCandidatesAtOnce = 2;
 constexpr size_t kLosslessClusters = 24;
 // The frames the automatic K is estimated on: windows of kSampleWindow frames every kSampleStride frames (all frames
 // when there are at most twice kSampleStride), and the motion refinement iterations of each candidate.
@@ -66,17 +70,19 @@ class CandidateCost {
   CandidateCost(const EncodeProblem& problem, const StreamContent& content)
       : problem_(problem), content_(content), sample_(sample_frames(problem)) {}
 
-  double operator()(const Clusters& merged, uint8_t flags) const {
+  // On `threads` threads (the same estimate for every count); `report`: whether to report progress (one caller at
+  // a time may).
+  double operator()(const Clusters& merged, uint8_t flags, size_t threads, bool report) const {
     const EncodeProblem& p = problem_;
-    report_progress(p.settings, "cluster count: trying " + std::to_string(merged.count) + " clusters");
+    if (report) report_progress(p.settings, "cluster count: trying " + std::to_string(merged.count) + " clusters");
     const Clusters candidate = refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency,
-                                                kSampleRefinements, nullptr, p.settings.threads);
+                                                kSampleRefinements, nullptr, threads);
     StreamContent trial = content_;
     trial.flags = flags;
     trial.clip_frames = sample_.clip_frames;
     trial.cluster_count = uint32_t(candidate.count);
     trial.labels = candidate.label;
-    const AffineMotion motion = fit_affine_motion(p.base_welded.data(), sample_.frames, candidate, p.settings.threads);
+    const AffineMotion motion = fit_affine_motion(p.base_welded.data(), sample_.frames, candidate, threads);
     const double motion_step = kMotionStepRatio * p.mean_step;
     quantize_motion_and_weights(motion, motion_step / cluster_radius(p.base_welded, motion.centroid, candidate.label),
                                 motion_step, p.base_welded, sample_.frames, candidate, p.adjacency,
@@ -85,7 +91,7 @@ class CandidateCost {
     const std::vector<double> steps = {p.mean_step, 2 * p.mean_step};
     SubbandCurve measured[3];
     measure_subbands(trial, p.traversal, trial_predictions, sample_.frames.positions, p.multiplicity,
-                     {steps, steps, steps}, measured, p.settings.threads);
+                     {steps, steps, steps}, measured, threads);
     std::vector<uint8_t> side;
     write_stream(trial, p.base, side);
     double distortion[2], bits[2];
@@ -111,39 +117,68 @@ class CandidateCost {
   const Sample sample_;
 };
 
+// Candidates of the counts `counts` (merged from the segmentation) and their costs, on up to `threads` threads: a
+// candidate a thread, each with its share of the threads (a cost is the same for every thread count), the first
+// reporting progress when `report`.
+struct Tried {
+  Clusters clusters;
+  double cost = 0;
+};
+std::vector<Tried> try_counts(const EncodeProblem& problem, const Clusters& morse, const CandidateCost& cost_of,
+                              const std::vector<size_t>& counts, uint8_t flags, size_t threads, bool report) {
+  std::vector<Tried> tried(counts.size());
+  const size_t each = std::max<size_t>(1, threads / std::max<size_t>(counts.size(), 1));
+  parallel_items(counts.size(), threads, [&](size_t i) {
+    tried[i].clusters =
+        merge_clusters(morse, counts[i], problem.base_welded.data(), problem.trajectories, problem.adjacency);
+    tried[i].cost = cost_of(tried[i].clusters, flags, each, report && i == 0);
+  });
+  return tried;
+}
+
 // Automatic K: more clusters cost motion side information and save residual bits. Candidates from the
 // segmentation's own count down by factors of 2/3, each merged from the segmentation; the search stops at the first
 // candidate that costs more than the one before. Then the geometric means of the best and its tried neighbours: the
 // cost is not smooth in K, and a step of 2/3 missed K worth 7 % (Fox, 6 for 9). `best_cost` receives the chosen K's
-// cost.
+// cost. With several threads the search tries up to kCandidatesAtOnce counts at once, ahead of the one that stops it
+// (what it chooses does not change: the costs are taken in order, those past the stop left unused).
 Clusters automatic_count(const EncodeProblem& problem, const Clusters& morse, const CandidateCost& cost_of,
-                         uint8_t flags, double& best_cost) {
-  auto merged = [&](size_t k) {
-    return merge_clusters(morse, k, problem.base_welded.data(), problem.trajectories, problem.adjacency);
-  };
+                         uint8_t flags, size_t threads, bool report, double& best_cost) {
   const size_t largest =
       std::max<size_t>(1, std::min({morse.count, problem.welded / kVerticesPerCluster, kMaxClusters}));
-  Clusters best = merged(largest);
-  best_cost = cost_of(best, flags);
+  std::vector<size_t> counts = {largest};  // the counts the search goes down through
+  for (size_t k = largest * 2 / 3; k >= kMinAutomaticClusters; k = k * 2 / 3) counts.push_back(k);
+  std::vector<Tried> tried;
+  auto cost_at = [&](size_t i) -> Tried& {  // tries counts[i] and the ones after it that the threads allow
+    if (i >= tried.size()) {
+      const size_t end = std::min({counts.size(), i + std::max<size_t>(threads, 1), i + kCandidatesAtOnce});
+      std::vector<Tried> batch = try_counts(problem, morse, cost_of, {counts.begin() + std::ptrdiff_t(i),
+                                            counts.begin() + std::ptrdiff_t(end)}, flags, threads, report);
+      for (Tried& t : batch) tried.push_back(std::move(t));
+    }
+    return tried[i];
+  };
+  Clusters best = std::move(cost_at(0).clusters);
+  best_cost = tried[0].cost;
   size_t above = 0, below = 0;  // the tried counts next to the best one, 0 for none
-  for (size_t k = largest * 2 / 3, previous = best.count; k >= kMinAutomaticClusters; k = k * 2 / 3) {
-    Clusters candidate = merged(k);
-    const double cost = cost_of(candidate, flags);
-    if (!(cost < best_cost)) {
-      below = candidate.count;
+  for (size_t i = 1, previous = best.count; i < counts.size(); ++i) {
+    Tried& candidate = cost_at(i);
+    if (!(candidate.cost < best_cost)) {
+      below = candidate.clusters.count;
       break;
     }
-    above = previous, previous = candidate.count;
-    best = std::move(candidate), best_cost = cost;
+    above = previous, previous = candidate.clusters.count;
+    best = std::move(candidate.clusters), best_cost = candidate.cost;
   }
   const size_t chosen = best.count;
+  std::vector<size_t> between;  // the geometric means tried, in the order of {above, below}
   for (size_t neighbour : {above, below}) {
     const size_t k = size_t(std::lround(std::sqrt(double(neighbour) * double(chosen))));
     if (neighbour == 0 || k == neighbour || k == chosen || k < kMinAutomaticClusters) continue;
-    Clusters candidate = merged(k);
-    const double cost = cost_of(candidate, flags);
-    if (cost < best_cost) best = std::move(candidate), best_cost = cost;
+    between.push_back(k);
   }
+  for (Tried& candidate : try_counts(problem, morse, cost_of, between, flags, threads, report))
+    if (candidate.cost < best_cost) best = std::move(candidate.clusters), best_cost = candidate.cost;
   return best;
 }
 
@@ -159,24 +194,30 @@ Clusters choose_clusters(const EncodeProblem& problem, const std::vector<Cluster
   if (settings.mode == RateMode::lossless)
     return merged(segmentations.back(), settings.clusters ? settings.clusters : kLosslessClusters);
   const CandidateCost cost_of(problem, content);
-  double best_cost = 0;
-  Clusters clusters;
+  // Each segmentation's best candidate and its cost, the segmentations on threads of their own (the threads shared
+  // out among them; each estimate is the same for every thread count), the first one reporting progress.
+  const size_t count = segmentations.size(), threads = thread_count(settings.threads);
+  const size_t each = std::max<size_t>(1, threads / count);
+  std::vector<Clusters> candidates(count);
+  std::vector<double> costs(count);
+  parallel_items(count, threads, [&](size_t item) {
+    const size_t s = count - 1 - item;  // the last (refined) one first
+    if (settings.clusters) {
+      candidates[s] = merged(segmentations[s], settings.clusters);
+      costs[s] = cost_of(candidates[s], content.flags, each, item == 0);
+    } else {
+      candidates[s] = automatic_count(problem, segmentations[s], cost_of, content.flags, each, item == 0, costs[s]);
+    }
+  });
   // The last (refined) segmentation first: an earlier one replaces it only when estimated strictly cheaper (a tie, or
   // a cost that is not a number on a mesh of a few vertices, keeps the refined one).
-  for (size_t s = segmentations.size(); s-- > 0;) {
-    double cost;
-    Clusters candidate;
-    if (settings.clusters) {
-      candidate = merged(segmentations[s], settings.clusters);
-      cost = cost_of(candidate, content.flags);
-    } else {
-      candidate = automatic_count(problem, segmentations[s], cost_of, content.flags, cost);
-    }
-    if (s + 1 == segmentations.size() || cost < best_cost) {
-      best_cost = cost, clusters = std::move(candidate);
+  double best_cost = 0;
+  Clusters clusters;
+  for (size_t s = count; s-- > 0;)
+    if (s + 1 == count || costs[s] < best_cost) {
+      best_cost = costs[s], clusters = std::move(candidates[s]);
       if (chosen) *chosen = s;
     }
-  }
   // Temporal and spatial residual prediction (when allowed) are kept when the estimate says they pay: temporal does
   // for slow sequences, not always for fast ones; spatial does at higher rates, not always at low ones, where most
   // residuals quantize to zero (docs/codec.md). The estimate is biased a little against temporal prediction (each
@@ -184,7 +225,7 @@ Clusters choose_clusters(const EncodeProblem& problem, const std::vector<Cluster
   for (uint8_t prediction : {format::kFlagTemporalResiduals, format::kFlagSpatialResiduals}) {
     if (!(content.flags & prediction)) continue;
     const uint8_t without = uint8_t(content.flags & ~prediction);
-    const double cost = cost_of(clusters, without);
+    const double cost = cost_of(clusters, without, threads, true);
     if (cost < best_cost) content.flags = without, best_cost = cost;
   }
   return clusters;

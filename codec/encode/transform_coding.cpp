@@ -217,37 +217,42 @@ struct Choice {
 
 // The options minimizing bits + lambda × error per cluster, lambda bisected so that the error is at most `budget`;
 // the stream's basis charged once, its size the largest any cluster uses (each of `sizes` tried as the most a
-// cluster may use).
+// cluster may use: on up to `threads` threads, the first of the fewest bits chosen, as in order).
 Choice choose(const std::vector<std::vector<Option>>& options, double budget, const std::vector<size_t>& sizes,
-              double bits_per_vector) {
-  Choice best;
-  for (size_t most : sizes) {
-    auto pick = [&](double lambda) {
-      Choice c;
-      c.bits = 0;
-      for (const std::vector<Option>& list : options) {
-        const Option* chosen = &list[0];
-        for (const Option& o : list)
-          if (!(o.source == format::kBasisStream && o.m > most) &&
-              o.bits + lambda * o.error < chosen->bits + lambda * chosen->error)
-            chosen = &o;
-        c.per_cluster.push_back(*chosen);
-        c.bits += chosen->bits, c.error += chosen->error;
-        if (chosen->source == format::kBasisStream) c.stream_vectors = std::max(c.stream_vectors, chosen->m);
-      }
-      c.bits += double(c.stream_vectors) * bits_per_vector;
-      c.lambda = lambda;
-      return c;
-    };
+              double bits_per_vector, size_t threads) {
+  // The choice at lambda of clusters using at most `most` of the stream's vectors; the options chosen only when
+  // `keep` (the bisection needs the sums alone).
+  auto pick = [&](double lambda, size_t most, bool keep) {
+    Choice c;
+    c.bits = 0;
+    if (keep) c.per_cluster.reserve(options.size());
+    for (const std::vector<Option>& list : options) {
+      const Option* chosen = &list[0];
+      for (const Option& o : list)
+        if (!(o.source == format::kBasisStream && o.m > most) &&
+            o.bits + lambda * o.error < chosen->bits + lambda * chosen->error)
+          chosen = &o;
+      if (keep) c.per_cluster.push_back(*chosen);
+      c.bits += chosen->bits, c.error += chosen->error;
+      if (chosen->source == format::kBasisStream) c.stream_vectors = std::max(c.stream_vectors, chosen->m);
+    }
+    c.bits += double(c.stream_vectors) * bits_per_vector;
+    c.lambda = lambda;
+    return c;
+  };
+  std::vector<Choice> per_size(sizes.size());  // bits infinite where no lambda meets the budget
+  parallel_items(sizes.size(), threads, [&](size_t j) {
     double low = 1e-12, high = 1e12;
-    if (pick(high).error > budget) continue;
+    if (pick(high, sizes[j], false).error > budget) return;
     for (int i = 0; i < 80 && high > low * (1 + 1e-6); ++i) {
       const double middle = std::sqrt(low * high);
-      (pick(middle).error > budget ? low : high) = middle;
+      (pick(middle, sizes[j], false).error > budget ? low : high) = middle;
     }
-    const Choice c = pick(high);
-    if (c.bits < best.bits) best = c;
-  }
+    per_size[j] = pick(high, sizes[j], true);
+  });
+  Choice best;
+  for (Choice& c : per_size)
+    if (c.bits < best.bits) best = std::move(c);
   return best;
 }
 
@@ -376,51 +381,74 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
   std::vector<std::vector<Eigen::Index>> members(clusters);
   for (size_t w = 0; w < welded; ++w)
     for (Eigen::Index a = 0; a < 3; ++a) members[content.labels[w]].push_back(Eigen::Index(w * 3) + a);
+  // Two rounds of items on the threads, each item's work its own: first the stream's basis (the one largest
+  // eigenproblem) and each cluster's own basis and options, then each cluster's options in the stream's basis (which
+  // needs it). Larger clusters first, so that no thread is left with a large one at the end. Each cluster's options
+  // are then listed as they always are: none, in the stream's basis, in its own.
   Matrix stream_basis;
-  {
-    std::vector<Eigen::Index> all(welded * 3);
-    for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
-    const std::vector<Eigen::Index> which = sample(all, most_rows);
-    Matrix sampled;
-    std::vector<double> sampled_weight;
-    gather(rows, weight, which, double(all.size()) / double(which.size()), sampled, sampled_weight);
-    stream_basis = pca_basis(sampled, sampled_weight, negligible);
-  }
   std::vector<Matrix> own_basis(clusters);
   std::vector<std::vector<double>> own_energy(clusters), stream_energy(clusters);
-  std::vector<std::vector<Option>> options(clusters);
-  auto prepare = [&](size_t k) {
+  std::vector<std::vector<Option>> options(clusters), own_options(clusters);
+  std::vector<size_t> order(clusters);
+  for (size_t k = 0; k < clusters; ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return members[a].size() > members[b].size(); });
+  // The cluster's rows that inform its options (a sample of at most most_rows), each standing for `scale` rows, and
+  // their weighted energy.
+  struct Sampled {
+    Matrix rows;
+    std::vector<double> weight;
+    double scale = 1, total = 0;
+  };
+  auto sampled_rows = [&](size_t k) {
+    // The energy the options leave is the sample's less what they keep of it: both from the same rows, whose
+    // estimate of the cluster's is then unbiased (the sample's share of the whole is not).
+    const std::vector<Eigen::Index> which = sample(members[k], most_rows);
+    Sampled out;
+    out.scale = double(members[k].size()) / double(which.size());
+    gather(rows, weight, which, out.scale, out.rows, out.weight);
+    for (size_t i = 0; i < which.size(); ++i) out.total += out.weight[i] * out.rows.row(Eigen::Index(i)).squaredNorm();
+    return out;
+  };
+  const size_t threads = thread_count(problem.settings.threads);
+  parallel_items(clusters + 1, threads, [&](size_t item) {
+    if (item == 0) {
+      std::vector<Eigen::Index> all(welded * 3);
+      for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
+      const std::vector<Eigen::Index> which = sample(all, most_rows);
+      Matrix sampled;
+      std::vector<double> sampled_weight;
+      gather(rows, weight, which, double(all.size()) / double(which.size()), sampled, sampled_weight);
+      stream_basis = pca_basis(sampled, sampled_weight, negligible);
+      return;
+    }
+    const size_t k = order[item - 1];
+    if (members[k].empty()) return;
+    const Sampled own = sampled_rows(k);
+    own_basis[k] = pca_basis(own.rows, own.weight, negligible);
+    const Matrix in_own = own.rows * own_basis[k].transpose();
+    add_options(in_own, own.weight, own.scale, own.total, format::kBasisOwn, unit, bits_per_vector, negligible,
+                own_options[k], own_energy[k]);
+  });
+  parallel_items(clusters, threads, [&](size_t item) {
+    const size_t k = order[item];
     if (members[k].empty()) {
       options[k].push_back({format::kBasisNone, 0, 0, 8, 0.0});
       return;
     }
-    // The energy the options leave is the sample's less what they keep of it: both from the same rows, whose
-    // estimate of the cluster's is then unbiased (the sample's share of the whole is not).
-    const std::vector<Eigen::Index> which = sample(members[k], most_rows);
-    const double scale = double(members[k].size()) / double(which.size());
-    Matrix own;
-    std::vector<double> own_weight;
-    gather(rows, weight, which, scale, own, own_weight);
-    double total = 0;
-    for (size_t i = 0; i < which.size(); ++i) total += own_weight[i] * own.row(Eigen::Index(i)).squaredNorm();
-    options[k].push_back({format::kBasisNone, 0, 0, 8, total});
-    const Matrix in_stream = own * stream_basis.transpose();
-    add_options(in_stream, own_weight, scale, total, format::kBasisStream, unit, bits_per_vector, negligible,
+    const Sampled own = sampled_rows(k);
+    options[k].push_back({format::kBasisNone, 0, 0, 8, own.total});
+    const Matrix in_stream = own.rows * stream_basis.transpose();
+    add_options(in_stream, own.weight, own.scale, own.total, format::kBasisStream, unit, bits_per_vector, negligible,
                 options[k], stream_energy[k]);
-    own_basis[k] = pca_basis(own, own_weight, negligible);
-    const Matrix in_own = own * own_basis[k].transpose();
-    add_options(in_own, own_weight, scale, total, format::kBasisOwn, unit, bits_per_vector, negligible, options[k],
-                own_energy[k]);
-  };
-  parallel_ranges(clusters, thread_count(problem.settings.threads), [&](size_t begin, size_t end) {
-    for (size_t k = begin; k < end; ++k) prepare(k);
+    options[k].insert(options[k].end(), own_options[k].begin(), own_options[k].end());
   });
   // Choose, then measure the decoder's frames exactly; tighten the budget until they meet it.
   const std::vector<size_t> basis_size_list = basis_sizes(frames);
   double target = budget;
   StreamContent transformed;
   for (int attempt = 0; attempt < 8; ++attempt) {
-    const Choice choice = choose(options, target, basis_size_list, bits_per_vector);
+    const Choice choice = choose(options, target, basis_size_list, bits_per_vector, threads);
     if (std::isinf(choice.bits)) return false;
     transformed = content;
     with_bases(choice, stream_basis, stream_energy, own_basis, own_energy, transformed);
