@@ -22,8 +22,9 @@ inline size_t thread_count(size_t requested) {
 }
 
 // Calls body(begin, end) for consecutive ranges covering [0, count), each on a thread of its own (the first on the
-// calling thread); at most `threads` ranges, of near-equal size. An exception in a range is rethrown here after every
-// thread has finished (the first range's first).
+// calling thread); at most `threads` ranges, of near-equal size. The ranges do not depend on how many threads start:
+// a range whose thread cannot be started runs on the calling thread after the first. An exception in a range is
+// rethrown here after every thread has finished (the first range's first).
 template <typename Body>
 void parallel_ranges(size_t count, size_t threads, Body&& body) {
   const size_t ranges = std::min(std::max<size_t>(threads, 1), count);
@@ -41,8 +42,13 @@ void parallel_ranges(size_t count, size_t threads, Body&& body) {
   };
   std::vector<std::thread> workers;
   workers.reserve(ranges - 1);
-  for (size_t r = 1; r < ranges; ++r) workers.emplace_back(run, r);
+  size_t started = 1;
+  try {
+    for (; started < ranges; ++started) workers.emplace_back(run, started);
+  } catch (const std::system_error&) {  // no more threads: this one runs the ranges that have none
+  }
   run(0);
+  for (size_t r = started; r < ranges; ++r) run(r);
   for (std::thread& worker : workers) worker.join();
   for (const std::exception_ptr& error : errors)
     if (error) std::rethrow_exception(error);

@@ -7,7 +7,6 @@
 #include <cassert>
 #include <cmath>
 #include <cstring>
-#include <system_error>
 
 #include "common/frame_sequence.h"
 #include "common/stream_format.h"
@@ -247,12 +246,7 @@ Status FrameDecoder::decode_frames(size_t count, float* out, size_t threads) {
         if (!failed[b].ok()) return;
       }
     };
-    try {
-      parallel_ranges(blocks, threads, decode_blocks);
-    } catch (const std::system_error&) {  // no thread could be started: all on this one (the frames do not change)
-      std::fill(failed.begin(), failed.end(), Status::Ok());
-      decode_blocks(0, blocks);
-    }
+    parallel_ranges(blocks, threads, decode_blocks);  // (ranges without a thread run on this one)
     Status status = Status::Ok();
     for (const Status& s : failed)
       if (!s.ok()) {
