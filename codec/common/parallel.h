@@ -1,7 +1,8 @@
 // Work split over threads: the encoder's stages, and the runtime decoder's version-4 frames where its caller asks
-// for threads (AnimationDecoder::set_threads; never in its WebAssembly build, which has none). Each call runs contiguous ranges of its items on up to `threads` threads and returns when
-// all are done; the ranges, and so whatever the body computes per item, do not depend on the thread count. Callers
-// keep results per item (or per range in range order), so the output is the same bytes for every thread count.
+// for threads (AnimationDecoder::set_threads; never in its WebAssembly build, which has none). Each call runs items
+// (or contiguous ranges of them) on up to `threads` threads and returns when all are done; what the body computes per
+// item or range does not depend on the thread count. Callers keep results per item (or per range in range order), so
+// the output is the same bytes for every thread count.
 #pragma once
 
 #include <algorithm>
@@ -21,45 +22,12 @@ inline size_t thread_count(size_t requested) {
   return hardware > 0 ? hardware : 1;
 }
 
-// Calls body(begin, end) for consecutive ranges covering [0, count), each on a thread of its own (the first on the
-// calling thread); at most `threads` ranges, of near-equal size. The ranges do not depend on how many threads start:
-// a range whose thread cannot be started runs on the calling thread after the first. An exception in a range is
-// rethrown here after every thread has finished (the first range's first).
-template <typename Body>
-void parallel_ranges(size_t count, size_t threads, Body&& body) {
-  const size_t ranges = std::min(std::max<size_t>(threads, 1), count);
-  if (ranges <= 1) {
-    if (count > 0) body(size_t(0), count);
-    return;
-  }
-  std::vector<std::exception_ptr> errors(ranges);
-  auto run = [&](size_t r) {
-    try {
-      body(count * r / ranges, count * (r + 1) / ranges);
-    } catch (...) {
-      errors[r] = std::current_exception();
-    }
-  };
-  std::vector<std::thread> workers;
-  workers.reserve(ranges - 1);
-  size_t started = 1;
-  try {
-    for (; started < ranges; ++started) workers.emplace_back(run, started);
-  } catch (const std::system_error&) {  // no more threads: this one runs the ranges that have none
-  }
-  run(0);
-  for (size_t r = started; r < ranges; ++r) run(r);
-  for (std::thread& worker : workers) worker.join();
-  for (const std::exception_ptr& error : errors)
-    if (error) std::rethrow_exception(error);
-}
-
 // Calls body(i) for every i in [0, count), the items handed out one at a time, in order, to up to `threads` threads
 // as each finishes its last (item 0 on the calling thread, which may report progress from it): for items of unequal
-// cost, which ranges would leave some threads idle behind others. What an item computes must depend on the item alone (results kept per item): the output
-// is then the same for every thread count and every order in which they finish. A thread that cannot be started
-// leaves its share to the others. An exception in an item stops the handing out; the lowest failed item's exception
-// is rethrown here after every thread has finished.
+// cost, which fixed shares would leave some threads idle behind others. What an item computes must depend on the
+// item alone (results kept per item): the output is then the same for every thread count and every order in which
+// they finish. A thread that cannot be started leaves its share to the others. An exception in an item stops the
+// handing out; the lowest failed item's exception is rethrown here after every thread has finished.
 template <typename Body>
 void parallel_items(size_t count, size_t threads, Body&& body) {
   const size_t wanted = std::min(std::max<size_t>(threads, 1), count);
@@ -90,6 +58,16 @@ void parallel_items(size_t count, size_t threads, Body&& body) {
   for (std::thread& worker : workers) worker.join();
   for (const std::exception_ptr& error : errors)
     if (error) std::rethrow_exception(error);
+}
+
+// Calls body(begin, end) for consecutive ranges covering [0, count): at most `threads` ranges, of near-equal size,
+// each an item of parallel_items (the first on the calling thread; a range whose thread cannot be started runs on
+// another). The ranges do not depend on how many threads start. An exception in a range is rethrown here after every
+// thread has finished (the lowest failed range's).
+template <typename Body>
+void parallel_ranges(size_t count, size_t threads, Body&& body) {
+  const size_t ranges = std::min(std::max<size_t>(threads, 1), count);
+  parallel_items(ranges, ranges, [&](size_t r) { body(count * r / ranges, count * (r + 1) / ranges); });
 }
 
 }  // namespace segmorph

@@ -4,7 +4,6 @@
 #include <cstring>
 
 #include "common/reconstruction.h"
-#include "common/stream_format.h"
 
 namespace segmorph {
 namespace {

@@ -27,7 +27,7 @@ class TransformBlocks {
 
   // welded: W × 3 (the welded base); centroid: K × 3 (AffineMotion::centroid). The blocks dequantize the content's
   // motion themselves (dequantize_transform, the doubles of dequantized_motion) into their own layout and read the
-  // bases where residuals keeps them; content and residuals must outlive the blocks.
+  // bases and coefficients where residuals keeps them: residuals must outlive the blocks.
   TransformBlocks(const StreamContent& content, const TransformResiduals& residuals, const float* welded,
                   const std::vector<double>& centroid, const ClusterWeights& weights,
                   Instructions instructions = Instructions::best);
@@ -53,7 +53,7 @@ class TransformBlocks {
     uint32_t m, pairs_end;       // the basis size; the end of its pairs in pairs_
   };
   struct Data {
-    size_t stride;  // from one row to the next (motion's and the bases'): the frame count plus kMaxFrames of zeros
+    size_t stride;  // from one row to the next (motion's and the bases'): F + TransformResiduals::kRowPadding
     const Vertex* vertices;
     size_t vertex_count;
     const Pair* pairs;

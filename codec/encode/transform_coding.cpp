@@ -394,7 +394,8 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
   std::stable_sort(order.begin(), order.end(),
                    [&](size_t a, size_t b) { return members[a].size() > members[b].size(); });
   // The cluster's rows that inform its options (a sample of at most most_rows), each standing for `scale` rows, and
-  // their weighted energy.
+  // their weighted energy. Gathered again in the second round rather than kept from the first: kept, every cluster's
+  // sample would be held at once (up to most_rows × F doubles each).
   struct Sampled {
     Matrix rows;
     std::vector<double> weight;
