@@ -82,6 +82,35 @@ TEST(FrameReferences, ARepeatedCycleIsVersionThreeAndCostsLittleMore) {
   EXPECT_EQ(decoded[0].positions, with.reconstruction[0].positions);
 }
 
+// The frames are scored on threads, each range of frames with a ring of its own filled from as far back as its first
+// frame's window reaches: two clips of cycles (a range may start inside either, or at a clip's first frame) give
+// the same stream on every thread count, with references a cycle back in both clips.
+TEST(FrameReferences, TheSameReferencesOnEveryThreadCount) {
+  const std::vector<FrameSequence> clips = {cycling_clip(36, 12), cycling_clip(27, 9, 0.5)};
+  const std::vector<float> base = quantized_base(clips[0]);
+  std::vector<uint8_t> first;
+  for (size_t threads : {1, 2, 3, 7}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    CodecSettings settings = residual_loop();
+    settings.threads = threads;
+    const Encoded encoded = encode(clips, base, settings);
+    ASSERT_GT(encoded.stream.size(), 5u);
+    EXPECT_TRUE(encoded.stream[5] & format::kFlagFrameReferences);
+    if (threads == 1) {
+      first = encoded.stream;
+      StreamContent content;
+      ASSERT_TRUE(read_stream(encoded.stream.data(), encoded.stream.size(), base, content).ok());
+      ASSERT_EQ(content.references.size(), 63u);
+      EXPECT_EQ(content.references[30] % 12, 0u);
+      EXPECT_GT(content.references[30], 0u);
+      EXPECT_EQ(content.references[36 + 20] % 9, 0u);
+      EXPECT_GT(content.references[36 + 20], 0u);
+    } else {
+      EXPECT_TRUE(encoded.stream == first) << "the stream differs from the one-thread stream";
+    }
+  }
+}
+
 // Lossless streams too: the frames come back bit for bit, in fewer bytes than without references.
 TEST(FrameReferences, LosslessRepeatsAreSmallerAndExact) {
   const std::vector<FrameSequence> clips = {cycling_clip(24, 8)};

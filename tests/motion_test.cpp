@@ -162,6 +162,14 @@ TEST(Motion, WeightsRecoverASyntheticBlend) {
     for (uint32_t i = weights.offset[v]; i < weights.offset[v + 1]; ++i) sum += weights.weight[i];
     EXPECT_NEAR(sum, 1.0, 1e-9);
   }
+  // Fitted over vertex ranges on threads: the same weights, in the same places, for every thread count.
+  for (size_t threads : {2, 3, 8, 300}) {
+    const ClusterWeights split =
+        fit_cluster_weights(base.data(), frames, clusters, motion, offset, neighbour, 1, 4, threads);
+    EXPECT_EQ(split.offset, weights.offset) << threads << " threads";
+    EXPECT_EQ(split.cluster, weights.cluster) << threads << " threads";
+    EXPECT_EQ(split.weight, weights.weight) << threads << " threads";
+  }
 }
 
 // The prediction of spec/bitstream.md section 8.5, written as the specification writes it: one rounding per

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/parallel.h"
 #include "common/stream_format.h"
 
 namespace segmorph {
@@ -56,7 +57,7 @@ uint32_t largest_reference_window(size_t vertices) {
 
 FrameReferences choose_frame_references(const StreamContent& content, const ResidualTraversal& traversal,
                                         const std::vector<float>& base_welded, const std::vector<float>& targets,
-                                        uint32_t max_window, double step) {
+                                        uint32_t max_window, double step, size_t threads) {
   FrameReferences chosen;
   const double inverse_step_squared = 1 / (step * step);
   const size_t welded = content.welded_count, frame_count = content.frame_count();
@@ -73,10 +74,7 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
   const ClusterWeights weights = dequantized_weights(content);
   const size_t longest = *std::max_element(content.clip_frames.begin(), content.clip_frames.end());
   const size_t ring = std::min<size_t>(max_window, longest) + 1;
-  std::vector<double> residuals(ring * needed.size() * 3);
-  auto residual_row = [&](size_t frame) { return &residuals[(frame % ring) * needed.size() * 3]; };
-  auto fill = [&](size_t frame) {
-    double* row = residual_row(frame);
+  auto fill = [&](double* row, size_t frame) {
     for (size_t n = 0; n < needed.size(); ++n) {
       const uint32_t v = traversal.order[needed[n]];
       double predicted[3] = {0, 0, 0};
@@ -93,11 +91,9 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
         row[n * 3 + size_t(a)] = double(targets[(frame * welded + v) * 3 + size_t(a)]) - predicted[a];
     }
   };
-  // The score of predicting `frame`'s residuals from those of `frame` − back (0: from zeros) on the sampled
-  // positions: about the bits of what is left after the temporal and spatial predictions, log2(1 + (e / step)^2).
-  auto score = [&](size_t frame, size_t back) {
-    const double* now = residual_row(frame);
-    const double* then = back > 0 ? residual_row(frame - back) : nullptr;
+  // The score of predicting `now`'s residuals from those of `then` (nullptr: from zeros) on the sampled positions:
+  // about the bits of what is left after the temporal and spatial predictions, log2(1 + (e / step)^2).
+  auto score = [&](const double* now, const double* then) {
     auto difference = [&](uint32_t position, int a) {
       const size_t at = size_t(needed_index[position]) * 3 + size_t(a);
       return then ? now[at] - then[at] : now[at];
@@ -117,11 +113,8 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
     }
     return sum;
   };
-
   // The coarse score: the squared difference alone, on every coarse_stride-th sampled position.
-  auto coarse_score = [&](size_t frame, size_t back) {
-    const double* now = residual_row(frame);
-    const double* then = back > 0 ? residual_row(frame - back) : nullptr;
+  auto coarse_score = [&](const double* now, const double* then) {
     double sum = 0;
     for (size_t s = 0; s < sampled.size(); s += coarse_stride) {
       const size_t at = size_t(needed_index[sampled[s]]) * 3;
@@ -133,34 +126,66 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
     return sum;
   };
 
+  // Each frame's choice depends only on the residuals of its window: the frames split into ranges of about equal
+  // work (a frame's candidates grow with its index in the clip), each range on a thread with a ring of its own,
+  // filled from as far back as its first frame's window reaches. The per-frame scores are summed in frame order
+  // afterwards: the same references and totals for every thread count.
   const bool temporal = content.flags & format::kFlagTemporalResiduals;
-  double total_implied = 0, total_best = 0;
-  size_t frame = 0;
-  for (uint32_t frames : content.clip_frames)
-    for (uint32_t f = 0; f < frames; ++f, ++frame) {
-      fill(frame);  // every frame, the clip's first too: later frames may reference it
+  std::vector<size_t> clip_index(frame_count);     // each frame's index in its clip
+  std::vector<double> cost(frame_count + 1, 0.0);  // cumulative estimated work
+  for (size_t c = 0, frame = 0; c < content.clip_frames.size(); ++c)
+    for (uint32_t f = 0; f < content.clip_frames[c]; ++f, ++frame) {
+      clip_index[frame] = f;
+      cost[frame + 1] = cost[frame] + 1 + double(std::min<size_t>(max_window, f));
+    }
+  const size_t ranges = std::min(thread_count(threads), frame_count);
+  std::vector<size_t> range_begin(ranges + 1, frame_count);
+  for (size_t r = 0, frame = 0; r < ranges; ++r) {
+    while (frame < frame_count && cost[frame] < cost[frame_count] * double(r) / double(ranges)) ++frame;
+    range_begin[r] = frame;
+  }
+  std::vector<double> implied_scores(frame_count, 0.0), best_scores(frame_count, 0.0);
+  parallel_items(ranges, ranges, [&](size_t r) {
+    const size_t begin = range_begin[r], end = range_begin[r + 1];
+    if (begin == end) return;
+    std::vector<double> residuals(ring * needed.size() * 3);
+    auto row = [&](size_t frame) { return &residuals[(frame % ring) * needed.size() * 3]; };
+    const size_t reach = std::min(clip_index[begin], ring - 1);  // the earlier frames the first one's window reads
+    for (size_t frame = begin - reach; frame < begin; ++frame) fill(row(frame), frame);
+    for (size_t frame = begin; frame < end; ++frame) {
+      fill(row(frame), frame);  // every frame, the clip's first too: later frames may reference it
+      const size_t f = clip_index[frame];
       if (f == 0) continue;
+      auto back_row = [&](size_t back) { return back > 0 ? row(frame - back) : nullptr; };
       const size_t implied = temporal ? 1 : 0;  // versions 1 and 2
       const size_t window = std::min<size_t>(max_window, f);
       std::vector<std::pair<double, size_t>> coarse;
       // Without temporal residuals (the cluster search measured that the previous frame does not pay), only the frames
       // further back are candidates.
       for (size_t back = 0; back <= window; ++back)
-        if (back != implied && (temporal || back != 1)) coarse.emplace_back(coarse_score(frame, back), back);
+        if (back != implied && (temporal || back != 1))
+          coarse.emplace_back(coarse_score(row(frame), back_row(back)), back);
       std::sort(coarse.begin(), coarse.end());
-      const double implied_score = score(frame, implied);
+      const double implied_score = score(row(frame), back_row(implied));
       size_t best = implied;
       double best_score = implied_score;
       for (size_t i = 0; i < std::min(kFinalists, coarse.size()); ++i) {
-        const double candidate = score(frame, coarse[i].second);
+        const double candidate = score(row(frame), back_row(coarse[i].second));
         if (candidate < best_score) best_score = candidate, best = coarse[i].second;
       }
       if (!(best_score <= kReferenceGain * implied_score)) best = implied, best_score = implied_score;
-      total_implied += implied_score, total_best += best_score;
+      implied_scores[frame] = implied_score, best_scores[frame] = best_score;
       chosen.references[frame] = uint32_t(best);
-      chosen.window = std::max(chosen.window, uint32_t(best));
-      chosen.needed = chosen.needed || best != implied;
     }
+  });
+  const size_t implied = temporal ? 1 : 0;
+  double total_implied = 0, total_best = 0;
+  for (size_t frame = 0; frame < frame_count; ++frame) {
+    if (clip_index[frame] == 0) continue;
+    total_implied += implied_scores[frame], total_best += best_scores[frame];
+    chosen.window = std::max(chosen.window, chosen.references[frame]);
+    chosen.needed = chosen.needed || chosen.references[frame] != implied;
+  }
   // Worth a try only when the estimate promises much: the rate control then measures whether they pay.
   chosen.needed = chosen.needed && total_best <= kPromisingShare * total_implied;
   return chosen;

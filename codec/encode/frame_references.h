@@ -23,10 +23,11 @@ struct FrameReferences {
 // spatial predictions would use them, on a sample of the vertices: the reference the content's flags imply (the
 // previous frame with temporal residuals, else none) unless another leaves at most kReferenceGain of its score.
 // content: the welding, clips, flags, quantized motion and weights (its references are ignored); base_welded:
-// W × 3; targets: F × W × 3. With `needed`, the stream takes temporal residuals and frame references.
+// W × 3; targets: F × W × 3. With `needed`, the stream takes temporal residuals and frame references. The frames
+// are scored on up to `threads` threads (0: every core), with the same result for every count.
 FrameReferences choose_frame_references(const StreamContent& content, const ResidualTraversal& traversal,
                                         const std::vector<float>& base_welded, const std::vector<float>& targets,
-                                        uint32_t max_window, double step);
+                                        uint32_t max_window, double step, size_t threads = 1);
 
 // The largest window a stream of V vertices may have (format::kMaxReferenceWindowVertices), at least 1.
 uint32_t largest_reference_window(size_t vertices);

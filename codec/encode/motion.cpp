@@ -122,15 +122,19 @@ ClusterWeights own_cluster_weights(const Clusters& clusters) {
   return weights;
 }
 
-ClusterWeights fit_cluster_weights(const float* base, const Trajectories& frames, const Clusters& clusters,
-                                   const AffineMotion& motion, const std::vector<uint32_t>& adjacency_offset,
-                                   const std::vector<uint32_t>& adjacency, int rings, int max_clusters) {
+namespace {
+
+// fit_cluster_weights for the vertices [begin, end): their offsets from 0.
+ClusterWeights fit_range_weights(const float* base, const Trajectories& frames, const Clusters& clusters,
+                                 const AffineMotion& motion, const std::vector<uint32_t>& adjacency_offset,
+                                 const std::vector<uint32_t>& adjacency, int rings, int max_clusters, size_t begin,
+                                 size_t end) {
   const size_t vertex_count = frames.vertex_count, frame_count = frames.frame_count;
   ClusterWeights weights;
   weights.offset.assign(1, 0);
   std::vector<uint32_t> ring, next, seen_stamp(vertex_count, UINT32_MAX), candidates;
   std::vector<double> predictions;  // frame-major: F × m × 3
-  for (size_t v = 0; v < vertex_count; ++v) {
+  for (size_t v = begin; v < end; ++v) {
     const uint32_t own = clusters.label[v];
     // Clusters within `rings` rings, own first.
     candidates.assign(1, own);
@@ -222,6 +226,32 @@ ClusterWeights fit_cluster_weights(const float* base, const Trajectories& frames
       weights.weight.push_back(1.0);
     }
     weights.offset.push_back(uint32_t(weights.cluster.size()));
+  }
+  return weights;
+}
+
+}  // namespace
+
+// Every vertex's weights depend on it alone: the vertices split into ranges (more than threads, for balance: a
+// vertex's cost grows with its candidates), fitted on threads and joined in vertex order.
+ClusterWeights fit_cluster_weights(const float* base, const Trajectories& frames, const Clusters& clusters,
+                                   const AffineMotion& motion, const std::vector<uint32_t>& adjacency_offset,
+                                   const std::vector<uint32_t>& adjacency, int rings, int max_clusters,
+                                   size_t threads) {
+  const size_t vertex_count = frames.vertex_count;
+  const size_t ranges = std::min(vertex_count, 4 * thread_count(threads));
+  std::vector<ClusterWeights> parts(ranges);
+  parallel_items(ranges, thread_count(threads), [&](size_t r) {
+    parts[r] = fit_range_weights(base, frames, clusters, motion, adjacency_offset, adjacency, rings, max_clusters,
+                                 vertex_count * r / ranges, vertex_count * (r + 1) / ranges);
+  });
+  ClusterWeights weights;
+  weights.offset.assign(1, 0);
+  for (const ClusterWeights& part : parts) {
+    const uint32_t first = weights.offset.back();
+    for (size_t i = 1; i < part.offset.size(); ++i) weights.offset.push_back(first + part.offset[i]);
+    weights.cluster.insert(weights.cluster.end(), part.cluster.begin(), part.cluster.end());
+    weights.weight.insert(weights.weight.end(), part.weight.begin(), part.weight.end());
   }
   return weights;
 }

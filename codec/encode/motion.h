@@ -36,10 +36,11 @@ double motion_compensation_error(const float* base, const Trajectories& frames, 
 // `max_clusters` of them (the own cluster and the ones whose transforms alone fit it best). The weights
 // solve the least-squares problem of Eq. 3 under Σ w = 1, pulled slightly towards the own cluster so that
 // nearly identical candidate motions do not produce wild weights. `adjacency` is CSR (W + 1 offsets, then
-// neighbours).
+// neighbours). On up to `threads` threads (0: every core), the same weights for every count.
 ClusterWeights fit_cluster_weights(const float* base, const Trajectories& frames, const Clusters& clusters,
                                    const AffineMotion& motion, const std::vector<uint32_t>& adjacency_offset,
-                                   const std::vector<uint32_t>& adjacency, int rings, int max_clusters);
+                                   const std::vector<uint32_t>& adjacency, int rings, int max_clusters,
+                                   size_t threads = 1);
 
 // One-hot weights: every vertex follows its own cluster only (the prediction of Eq. 2 without blending).
 ClusterWeights own_cluster_weights(const Clusters& clusters);

@@ -83,11 +83,11 @@ void quantize_weights(const ClusterWeights& weights, StreamContent& content) {
 void quantize_motion_and_weights(const AffineMotion& fitted, double linear_step, double translation_step,
                                  const std::vector<float>& base_welded, const Trajectories& frames,
                                  const Clusters& clusters, const VertexAdjacency& adjacency, bool blend,
-                                 StreamContent& content) {
+                                 StreamContent& content, size_t threads) {
   quantize_motion(fitted, linear_step, translation_step, content);
   quantize_weights(
       blend ? fit_cluster_weights(base_welded.data(), frames, clusters, dequantized_motion(content, base_welded),
-                                  adjacency.offset, adjacency.neighbour, 2, 4)
+                                  adjacency.offset, adjacency.neighbour, 2, 4, threads)
             : own_cluster_weights(clusters),
       content);
 }

@@ -19,10 +19,11 @@ double cluster_radius(const std::vector<float>& base_welded, const std::vector<d
                       const std::vector<uint32_t>& labels);
 
 // content's motion (steps and F × K × 12 coefficients) and weights: the fitted motion quantized, then the weights
-// fitted (Eq. 3, over `rings` 2 and 4 clusters at most) to the dequantized motion, or one-hot when `blend` is false.
+// fitted (Eq. 3, over `rings` 2 and 4 clusters at most) to the dequantized motion, or one-hot when `blend` is false;
+// the weights on up to `threads` threads (the same for every count).
 void quantize_motion_and_weights(const AffineMotion& fitted, double linear_step, double translation_step,
                                  const std::vector<float>& base_welded, const Trajectories& frames,
                                  const Clusters& clusters, const VertexAdjacency& adjacency, bool blend,
-                                 StreamContent& content);
+                                 StreamContent& content, size_t threads = 1);
 
 }  // namespace segmorph

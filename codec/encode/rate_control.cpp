@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "common/parallel.h"
 #include "common/reconstruction.h"
 #include "common/stream_format.h"
 #include "common/vertex_gather.h"
@@ -54,6 +55,10 @@ class RateControlDriver {
   bool keep_references();
   bool references_rejected();
   size_t side_bytes();
+  void clear_residuals() {
+    content_.residuals.clear();
+    content_.narrow_residuals.clear();
+  }
   StepChoice choose();
   void residual_rate_control(bool fresh);
   void choose_motion_step_ratio();
@@ -134,7 +139,7 @@ void RateControlDriver::prepare_motion(double motion_step) {
   const bool lossless = settings_.mode == RateMode::lossless;
   quantize_motion_and_weights(fitted_, lossless ? 1e-6 : motion_step / radius_, lossless ? 1e-6 * radius_ : motion_step,
                               p_.base_welded, p_.trajectories, clusters_, p_.adjacency, settings_.blend_weights,
-                              content_);
+                              content_, settings_.threads);
   if (!references_chosen_) choose_references();
   choose_motion_coding();
   report_.ms_motion += milliseconds_since(begin);
@@ -151,8 +156,9 @@ void RateControlDriver::choose_references() {
   flags_without_references_ = content_.flags;
   if (!settings_.frame_references || !settings_.temporal_residuals) return;
   report_progress(settings_, "rate control: choosing each frame's reference");
-  FrameReferences chosen = choose_frame_references(content_, p_.traversal, p_.base_welded, p_.trajectories.positions,
-                                                   largest_reference_window(p_.vertex_count), mean_step_);
+  FrameReferences chosen =
+      choose_frame_references(content_, p_.traversal, p_.base_welded, p_.trajectories.positions,
+                              largest_reference_window(p_.vertex_count), mean_step_, settings_.threads);
   if (!chosen.needed) return;
   content_.flags |= format::kFlagFrameReferences | format::kFlagTemporalResiduals;
   content_.reference_window = chosen.window;
@@ -176,14 +182,23 @@ void RateControlDriver::choose_motion_coding() {
   const uint8_t weights = format::kFlagWeightContexts;
   content_.flags &= uint8_t(~(contexts | linear | weights));
   if (!settings_.motion_contexts && !settings_.weight_contexts) return;
-  size_t best = side_bytes();
-  uint8_t best_flags = content_.flags;
+  // The motion's options written side by side, each from a copy of the content with its flags.
+  std::vector<uint8_t> options = {content_.flags};
   if (settings_.motion_contexts)
-    for (uint8_t option : {contexts, uint8_t(contexts | linear)}) {
-      content_.flags = uint8_t((content_.flags & ~(contexts | linear)) | option);
-      const size_t bytes = side_bytes();
-      if (bytes < best) best = bytes, best_flags = content_.flags;
-    }
+    for (uint8_t option : {contexts, uint8_t(contexts | linear)}) options.push_back(uint8_t(content_.flags | option));
+  std::vector<size_t> bytes(options.size());
+  clear_residuals();
+  parallel_items(options.size(), thread_count(settings_.threads), [&](size_t i) {
+    StreamContent trial = content_;
+    trial.flags = options[i];
+    std::vector<uint8_t> side;
+    write_stream(trial, p_.base, side);
+    bytes[i] = side.size();
+  });
+  size_t best = bytes[0];
+  uint8_t best_flags = options[0];
+  for (size_t i = 1; i < options.size(); ++i)
+    if (bytes[i] < best) best = bytes[i], best_flags = options[i];
   content_.flags = best_flags;
   if (!settings_.weight_contexts || content_.weight_cluster.empty()) return;
   content_.flags |= weights;
@@ -239,8 +254,7 @@ bool RateControlDriver::keep_references() {
 
 // Bytes of the stream without residuals (header, welding, labels, motion, weights).
 size_t RateControlDriver::side_bytes() {
-  content_.residuals.clear();
-  content_.narrow_residuals.clear();
+  clear_residuals();
   std::vector<uint8_t> side;
   write_stream(content_, p_.base, side);
   return side.size();
