@@ -113,8 +113,14 @@ Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double n
   Eigen::MatrixXd scaled = rows;
   for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
   const bool dual = scaled.rows() < scaled.cols();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(dual ? Eigen::MatrixXd(scaled * scaled.transpose())
-                                                             : Eigen::MatrixXd(scaled.transpose() * scaled));
+  // The Gram matrix's lower triangle only (the solver reads no more): half the products of a full one.
+  const Eigen::Index n = dual ? scaled.rows() : scaled.cols();
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(n, n);
+  if (dual)
+    gram.selfadjointView<Eigen::Lower>().rankUpdate(scaled);
+  else
+    gram.selfadjointView<Eigen::Lower>().rankUpdate(scaled.transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram);
   const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
   const double largest = std::max(values.maxCoeff(), 0.0);
   double left = std::max(values.sum(), 0.0);
