@@ -11,6 +11,7 @@
 #include "common/stream_format.h"
 #include "decode/frame_decoder.h"
 #include "decode/transform_residuals.h"
+#include "encode/largest_eigenvectors.h"
 #include "encode/metrics.h"
 #include "encode/rate_distortion.h"
 #include "encode/transform_symbols.h"
@@ -108,7 +109,8 @@ std::vector<size_t> basis_sizes(size_t most) {
 // The orthonormal PCA basis of the rows (each weighted), as rows, by decreasing energy: the eigenvectors of
 // rowsᵀ W rows (F × F), or, with fewer rows than frames, of rows W rowsᵀ (n × n) taken back through the rows (the
 // same vectors, for a smaller eigenproblem). Only the vectors before the point where the energy left (the
-// eigenvalues after them) is below `negligible`, and none of no energy.
+// eigenvalues after them) is below `negligible`, and none of no energy: the eigenvalues decide how many, and only
+// those vectors are computed (LargestEigenvectors), each signed so that its largest entry is positive.
 Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible) {
   Eigen::MatrixXd scaled = rows;
   for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
@@ -120,19 +122,19 @@ Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double n
     gram.selfadjointView<Eigen::Lower>().rankUpdate(scaled);
   else
     gram.selfadjointView<Eigen::Lower>().rankUpdate(scaled.transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram);
-  const Eigen::VectorXd& values = solver.eigenvalues();  // ascending
+  const LargestEigenvectors solver(gram);
+  const Eigen::VectorXd& values = solver.values();  // ascending
   const double largest = std::max(values.maxCoeff(), 0.0);
   double left = std::max(values.sum(), 0.0);
-  Matrix basis(0, scaled.cols());
-  for (Eigen::Index i = values.size() - 1; i >= 0 && left > negligible && values(i) > largest * 1e-12; --i) {
-    Eigen::RowVectorXd vector =
-        dual ? Eigen::RowVectorXd((scaled.transpose() * solver.eigenvectors().col(i)).transpose())
-             : Eigen::RowVectorXd(solver.eigenvectors().col(i).transpose());
-    vector /= vector.norm();
-    basis.conservativeResize(basis.rows() + 1, Eigen::NoChange);
-    basis.row(basis.rows() - 1) = vector;
+  Eigen::Index kept = 0;
+  for (Eigen::Index i = values.size() - 1; i >= 0 && left > negligible && values(i) > largest * 1e-12; --i, ++kept)
     left -= values(i);
+  const Eigen::MatrixXd vectors = solver.vectors(kept);
+  Matrix basis(kept, scaled.cols());
+  for (Eigen::Index j = 0; j < kept; ++j) {
+    Eigen::VectorXd vector = dual ? Eigen::VectorXd(scaled.transpose() * vectors.col(j)) : vectors.col(j);
+    vector /= vector.norm();
+    basis.row(j) = vector.transpose();
   }
   return basis;
 }
