@@ -68,6 +68,18 @@ TEST(TransformResiduals, FewerBytesAtNoMoreErrorAndTheDecodersFramesAreTheEncode
         decode_animation(transform.stream.data(), transform.stream.size(), base, clips[0].triangles, decoded).ok());
     ASSERT_EQ(decoded.size(), clips.size());
     for (size_t c = 0; c < clips.size(); ++c) EXPECT_EQ(decoded[c].positions, transform.reconstruction[c].positions);
+    // On threads (the blocks of each clip side by side): the same floats.
+    for (size_t threads : {2, 3, 0}) {
+      std::vector<FrameSequence> threaded;
+      ASSERT_TRUE(decode_animation(transform.stream.data(), transform.stream.size(), base, clips[0].triangles,
+                                   threaded, threads)
+                      .ok());
+      ASSERT_EQ(threaded.size(), clips.size());
+      for (size_t c = 0; c < clips.size(); ++c) {
+        EXPECT_EQ(threaded[c].frame_count, clips[c].frame_count) << threads;
+        EXPECT_EQ(threaded[c].positions, transform.reconstruction[c].positions) << threads;
+      }
+    }
     StreamContent content;
     ASSERT_TRUE(read_stream(transform.stream.data(), transform.stream.size(), base, content).ok());
     EXPECT_TRUE(content.transform);
@@ -284,9 +296,11 @@ TEST(TransformResidualsHostile, BrokenStreamsAreRefused) {
     std::vector<uint8_t> stream;
     write_stream_until_invalid(changed, base, stream);
     std::vector<FrameSequence> decoded;
-    const Status status = decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded);
-    EXPECT_FALSE(status.ok()) << what;
-    EXPECT_EQ(status.code(), StatusCode::bad_data) << what;
+    for (size_t threads : {1, 3}) {
+      const Status status = decode_animation(stream.data(), stream.size(), base, clips[0].triangles, decoded, threads);
+      EXPECT_FALSE(status.ok()) << what << ", " << threads << " threads";
+      EXPECT_EQ(status.code(), StatusCode::bad_data) << what << ", " << threads << " threads";
+    }
   };
   size_t with_basis = 0;
   while (with_basis < content.cluster_count && content.basis_size[with_basis] == 0) ++with_basis;
@@ -320,6 +334,7 @@ TEST(TransformResidualsHostile, BrokenStreamsAreRefused) {
   for (size_t size = 0; size < encoded.stream.size(); size += std::max<size_t>(1, encoded.stream.size() / 200)) {
     std::vector<FrameSequence> decoded;
     EXPECT_FALSE(decode_animation(encoded.stream.data(), size, base, clips[0].triangles, decoded).ok()) << size;
+    EXPECT_FALSE(decode_animation(encoded.stream.data(), size, base, clips[0].triangles, decoded, 3).ok()) << size;
   }
 }
 

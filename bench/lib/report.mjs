@@ -234,8 +234,8 @@ function speedAndMemory(speed, shapes, charts, lines, flags) {
         `segmorph \`encode --error ${SPEED_ERROR}\` (its default, on every core; the stage times are those its --json reports ` +
         'for the median run, summed over primitives: "segmentation" includes the cluster count\'s search and the motion ' +
         'refinement, "tracks" the coding of node tracks and the kept skins\' search, "measure" the decoding of the encode ' +
-        'and its comparison with the input; "rest": loading, sampling, baking, the check that the stream decodes to the ' +
-        'encoder\'s frames, writing), segmorph `decode` of that file (reading, Draco, the animation, writing standard morph ' +
+        'and its comparison with the input; "rest": loading, sampling, baking, the check that a version-1 to 3 stream ' +
+        'decodes to the encoder\'s frames, writing), segmorph `decode` of that file (reading, Draco, the animation, writing standard morph ' +
         `targets; its throughput counts the input's vertex-frames over the whole command), and gltfpack \`-cc -af 0 -vp ${SPEED_GLTFPACK_BITS}\` on the same input (a Node.js process: WebAssembly).`);
   print();
   const stageNames = STAGES.map((s) => s.replace('_', ' '));

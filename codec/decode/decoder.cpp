@@ -345,7 +345,7 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
 }
 
 Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
-                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips) {
+                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips, size_t threads) {
   if (base.size() % 3 != 0) return Status(StatusCode::invalid_argument, "base positions must be V × 3");
   for (uint32_t index : triangles)
     if (index >= base.size() / 3) return Status(StatusCode::invalid_argument, "a triangle names a missing vertex");
@@ -359,6 +359,25 @@ Status decode_animation(const uint8_t* data, size_t size, const std::vector<floa
     return frames_to_reserve(content.clip_frames[c], bound - std::min(frame, bound), frame_floats * sizeof(float)) *
            frame_floats;
   };
+  if (content.transform && threads != 1) {
+    // Version 4 on threads: each clip in runs of as many frames as begin_clip would reserve (so memory still grows
+    // only as far as the frames before have decoded), each run's blocks side by side (decode_frames).
+    clips.assign(content.clip_frames.size(), FrameSequence());
+    for (size_t c = 0, frame = 0; c < clips.size(); ++c) {
+      FrameSequence& clip = clips[c];
+      clip.vertex_count = content.vertex_count;
+      clip.frame_count = content.clip_frames[c];
+      for (size_t f = 0; f < clip.frame_count;) {
+        const size_t run = std::max(std::min(begin_clip(c, frame) / std::max<size_t>(frame_floats, 1),
+                                             clip.frame_count - f),
+                                    std::min(decoder.block_frames(), clip.frame_count - f));
+        clip.positions.resize((f + run) * frame_floats);
+        SEGMORPH_RETURN_IF_ERROR(decoder.decode_frames(run, &clip.positions[f * frame_floats], threads));
+        f += run, frame += run;
+      }
+    }
+    return Status::Ok();
+  }
   auto append = [&](size_t, size_t count, std::vector<float>& positions) {
     return decoder.decode_append(count, positions);
   };

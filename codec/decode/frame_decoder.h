@@ -165,8 +165,10 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
 
 // Decodes a stream against the base mesh: positions (V × 3) and triangles (T × 3 indices into V, as the
 // encoder's clips had them). The clips come back with their positions (frame times are the container's
-// business and are left empty). Never reads outside [data, data + size).
+// business and are left empty). Never reads outside [data, data + size). A version-4 stream's frames on up to
+// `threads` threads (0: every hardware thread; FrameDecoder::decode_frames): the same floats for every count.
 Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
-                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips);
+                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips,
+                        size_t threads = 1);
 
 }  // namespace segmorph

@@ -192,7 +192,8 @@ Status try_transform(const EncodeProblem& problem, StreamContent&& content, std:
     restored.clear();
     std::vector<FrameSequence> frames;
     const Status decoded =
-        decode_animation(candidate.data(), candidate.size(), problem.base, problem.clips[0].triangles, frames);
+        decode_animation(candidate.data(), candidate.size(), problem.base, problem.clips[0].triangles, frames,
+                         problem.settings.threads);
     if (!decoded.ok() || frames.size() != times.size())
       return Status(StatusCode::internal,
                     "the version-4 stream the encoder measured does not decode: " + decoded.message());

@@ -73,7 +73,8 @@ struct CodecSettings {
 
 // clips: the primitive's clips (same V and triangles; frame 0 of clip 0 is the base frame). base: V × 3, the
 // base positions exactly as the decoder will have them. On success `stream` holds the encoded bytes and
-// `reconstruction` (if given) the frames a decoder will produce, bit for bit.
+// `reconstruction` (if given) the frames a decoder will produce, bit for bit: for a version-4 stream the stream as
+// decode_animation decodes it, for versions 1 to 3 the encoder's own closed loop (which the decoder repeats).
 Status encode_animation(const std::vector<FrameSequence>& clips, const std::vector<float>& base,
                         const CodecSettings& settings, std::vector<uint8_t>& stream, StreamReport* report = nullptr,
                         std::vector<FrameSequence>* reconstruction = nullptr);

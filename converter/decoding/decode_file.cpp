@@ -322,7 +322,7 @@ Status decode_target_mesh(tinygltf::Model& model, size_t m, const std::vector<Co
 
 Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std::vector<DecodedFrames>* decoded,
                                size_t threads) {
-  SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(model));
+  SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(model, threads));
   if (!declares_extension(model, kExtensionName)) return Status::Ok();
   DecodedSizes found;
   SEGMORPH_RETURN_IF_ERROR(decode_tracks_in_model(model, &found.animation_bytes, &found.coded_animations));

@@ -37,8 +37,8 @@ Status decode_draco_primitives(tinygltf::Model& model, size_t threads = 1);
 // primitives with the runtime decoder (include/segmorph/decoder.h): those that keep morph targets get them back, the
 // others take the form bake writes. A model with neither is left as it is. `decoded`, when given, receives what each
 // compressed primitive's stream decoded to (DecodedFrames, include/segmorph/segmorph.h), in the order of meshes and
-// primitives. `threads`: for each version-4 stream's frames (AnimationDecoder::set_threads; 0: every hardware
-// thread); the model written is the same for any.
+// primitives. `threads`: for the Draco primitives and each version-4 stream's frames (AnimationDecoder::set_threads;
+// 0: every hardware thread); the model written is the same for any.
 Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes = nullptr,
                                std::vector<DecodedFrames>* decoded = nullptr, size_t threads = 1);
 
