@@ -87,6 +87,14 @@ TEST(LargestEigenvectors, RepeatedValuesStayOrthogonal) {
   values.segment(9, 3).setConstant(1e-9);
   expect_largest(with_spectrum(values, 11), 12, 1e-9);
   expect_largest(Eigen::MatrixXd::Identity(20, 20), 5, 1e-12);
+  // Tiny but nonzero eigenvalues next to the wanted ones: pivots far below the norm's rounding (an unguarded solve
+  // overflows to infinity and NaN here).
+  Eigen::VectorXd denormal = Eigen::VectorXd::Zero(8);
+  denormal.head(2) << 1.0, 1e-310;
+  expect_largest(Eigen::MatrixXd(denormal.asDiagonal()), 2, 1e-12);
+  Eigen::VectorXd tiny = Eigen::VectorXd::Zero(8);
+  tiny.head(3) << 1.0, 1e-200, 1e-200 * (1 + 1e-15);
+  expect_largest(Eigen::MatrixXd(tiny.asDiagonal()), 2, 1e-12);
   expect_largest(Eigen::MatrixXd::Zero(16, 16), 4, 1e-12);
 }
 

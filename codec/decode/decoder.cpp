@@ -372,7 +372,7 @@ Status decode_animation(const uint8_t* data, size_t size, const std::vector<floa
                                              clip.frame_count - f),
                                     std::min(decoder.block_frames(), clip.frame_count - f));
         clip.positions.resize((f + run) * frame_floats);
-        SEGMORPH_RETURN_IF_ERROR(decoder.decode_frames(run, &clip.positions[f * frame_floats], threads));
+        SEGMORPH_RETURN_IF_ERROR(decoder.decode_frames(run, clip.positions.data() + f * frame_floats, threads));
         f += run, frame += run;
       }
     }

@@ -21,10 +21,13 @@ constexpr Eigen::Index kMostByIteration = 4;
 // (T − λI) for the symmetric tridiagonal T = (diagonal, off), factored by Gaussian elimination with partial pivoting
 // (rows i and i + 1 exchanged where the subdiagonal entry is the larger): P L U, U with two superdiagonals. A pivot
 // that vanishes is replaced by a tiny one (the matrix is singular to working precision at an eigenvalue: that is
-// what makes inverse iteration converge).
+// what makes inverse iteration converge); `guarded`, every pivot smaller than that, so that no solve can overflow
+// (LAPACK's dlagtf), for the rare matrix whose unguarded iteration does.
 class ShiftedTridiagonal {
  public:
-  ShiftedTridiagonal(const Eigen::VectorXd& diagonal, const Eigen::VectorXd& off, double shift, double tiny) {
+  ShiftedTridiagonal(const Eigen::VectorXd& diagonal, const Eigen::VectorXd& off, double shift, double tiny,
+                     bool guarded) {
+    auto pivot = [&](double p) { return (guarded ? std::fabs(p) < tiny : p == 0) ? std::copysign(tiny, p) : p; };
     const size_t n = size_t(diagonal.size());
     u0_.resize(n), u1_.assign(n, 0.0), u2_.assign(n, 0.0), l_.assign(n, 0.0), swapped_.assign(n, 0);
     for (size_t i = 0; i < n; ++i) u0_[i] = diagonal(Eigen::Index(i)) - shift;
@@ -35,15 +38,16 @@ class ShiftedTridiagonal {
       double& next_diagonal = u0_[i + 1];
       const double next_super = i + 2 < n ? off(Eigen::Index(i + 1)) : 0.0;
       if (std::fabs(u0_[i]) >= std::fabs(sub)) {
-        if (u0_[i] == 0) u0_[i] = tiny;
+        u0_[i] = pivot(u0_[i]);
         l_[i] = sub / u0_[i];
         next_diagonal -= l_[i] * u1_[i];
         u1_[i + 1] = next_super;
       } else {
         // Exchange rows i and i + 1: row i becomes (sub, next_diagonal, next_super).
         swapped_[i] = 1;
-        l_[i] = u0_[i] / sub;
-        u0_[i] = sub;
+        const double p = pivot(sub);  // sub, unless guarded and tiny
+        l_[i] = u0_[i] / p;
+        u0_[i] = p;
         const double old_super = u1_[i];
         u1_[i] = next_diagonal;
         u2_[i] = next_super;
@@ -51,7 +55,7 @@ class ShiftedTridiagonal {
         u1_[i + 1] = -l_[i] * next_super;
       }
     }
-    if (n > 0 && u0_[n - 1] == 0) u0_[n - 1] = tiny;
+    if (n > 0) u0_[n - 1] = pivot(u0_[n - 1]);
   }
 
   // x := (T − λI)⁻¹ x.
@@ -104,13 +108,8 @@ Eigen::MatrixXd LargestEigenvectors::vectors(Eigen::Index count) const {
     norm = std::max(norm, std::fabs(diagonal(i)) + (i > 0 ? std::fabs(off(i - 1)) : 0.0) +
                               (i + 1 < n ? std::fabs(off(i)) : 0.0));
   Eigen::MatrixXd tridiagonal_vectors(n, count);
-  if (count > n / kMostByIteration) {
-    // Many vectors: the QR iterations' own, the rotations accumulated (their cost no longer falls with the count).
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> all;
-    all.computeFromTridiagonal(diagonal, off, Eigen::ComputeEigenvectors);
-    tridiagonal_vectors = all.eigenvectors().rightCols(count).rowwise().reverse();
-    return in_matrix_basis(tridiagonal_vectors);
-  }
+  // Many vectors: the QR iterations' own, the rotations accumulated (their cost no longer falls with the count).
+  if (count > n / kMostByIteration) return all_vectors(diagonal, off, count);
   const double epsilon = std::numeric_limits<double>::epsilon();
   const double tiny = (norm > 0 ? norm : 1.0) * epsilon;  // a zero matrix: any orthonormal vectors
   Eigen::Index cluster_first = 0;
@@ -121,23 +120,38 @@ Eigen::MatrixXd LargestEigenvectors::vectors(Eigen::Index count) const {
     // Equal eigenvalues: shifts a little apart, so that each iteration does not find the same vector.
     if (j > cluster_first) shift = std::min(shift, previous_shift - 10 * epsilon * std::max(std::fabs(shift), tiny));
     previous_shift = shift;
-    const ShiftedTridiagonal factored(diagonal, off, shift, tiny);
-    // A fixed start with a component along every vector (a deterministic pseudo-random sequence).
     Eigen::VectorXd x(n);
-    uint64_t state = 0x9E3779B97F4A7C15ull ^ uint64_t(j);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      state = state * 6364136223846793005ull + 1442695040888963407ull;
-      x(i) = double(state >> 11) * 0x1.0p-53 - 0.5;
-    }
-    for (int iteration = 0; iteration < kIterations; ++iteration) {
-      x /= x.norm();
-      factored.solve(x);
-      for (Eigen::Index k = cluster_first; k < j; ++k) x -= tridiagonal_vectors.col(k).dot(x) * tridiagonal_vectors.col(k);
-    }
-    x /= x.norm();
+    auto iterate = [&](bool guarded) {
+      const ShiftedTridiagonal factored(diagonal, off, shift, tiny, guarded);
+      // A fixed start with a component along every vector (a deterministic pseudo-random sequence).
+      uint64_t state = 0x9E3779B97F4A7C15ull ^ uint64_t(j);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        x(i) = double(state >> 11) * 0x1.0p-53 - 0.5;
+      }
+      for (int iteration = 0; iteration <= kIterations; ++iteration) {
+        if (guarded) x /= x.cwiseAbs().maxCoeff();  // no overflow in the norm
+        x /= x.norm();
+        if (iteration == kIterations) break;
+        factored.solve(x);
+        for (Eigen::Index k = cluster_first; k < j; ++k)
+          x -= tridiagonal_vectors.col(k).dot(x) * tridiagonal_vectors.col(k);
+      }
+      return x.allFinite();
+    };
+    // An iteration that overflowed (pivots tiny but not zero) again with its pivots guarded; should that fail too,
+    // every vector from the QR sweeps.
+    if (!iterate(false) && !iterate(true)) return all_vectors(diagonal, off, count);
     tridiagonal_vectors.col(j) = x;
   }
   return in_matrix_basis(tridiagonal_vectors);
+}
+
+Eigen::MatrixXd LargestEigenvectors::all_vectors(const Eigen::VectorXd& diagonal, const Eigen::VectorXd& off,
+                                                 Eigen::Index count) const {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> all;
+  all.computeFromTridiagonal(diagonal, off, Eigen::ComputeEigenvectors);
+  return in_matrix_basis(all.eigenvectors().rightCols(count).rowwise().reverse());
 }
 
 Eigen::MatrixXd LargestEigenvectors::in_matrix_basis(const Eigen::MatrixXd& tridiagonal_vectors) const {

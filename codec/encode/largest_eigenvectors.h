@@ -26,6 +26,7 @@ class LargestEigenvectors {
 
  private:
   Eigen::MatrixXd in_matrix_basis(const Eigen::MatrixXd& tridiagonal_vectors) const;
+  Eigen::MatrixXd all_vectors(const Eigen::VectorXd& diagonal, const Eigen::VectorXd& off, Eigen::Index count) const;
 
   Eigen::Tridiagonalization<Eigen::MatrixXd> reduction_;
   Eigen::VectorXd values_;  // of the matrix

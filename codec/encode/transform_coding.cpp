@@ -110,7 +110,8 @@ std::vector<size_t> basis_sizes(size_t most) {
 // rowsᵀ W rows (F × F), or, with fewer rows than frames, of rows W rowsᵀ (n × n) taken back through the rows (the
 // same vectors, for a smaller eigenproblem). Only the vectors before the point where the energy left (the
 // eigenvalues after them) is below `negligible`, and none of no energy: the eigenvalues decide how many, and only
-// those vectors are computed (LargestEigenvectors), each signed so that its largest entry is positive.
+// those vectors are computed (LargestEigenvectors, which signs each eigenvector so that its largest entry is positive;
+// in the dual form that is the n-vector's sign, before it is taken back through the rows).
 Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible) {
   Eigen::MatrixXd scaled = rows;
   for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
