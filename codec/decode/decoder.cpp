@@ -359,29 +359,20 @@ Status decode_animation(const uint8_t* data, size_t size, const std::vector<floa
     return frames_to_reserve(content.clip_frames[c], bound - std::min(frame, bound), frame_floats * sizeof(float)) *
            frame_floats;
   };
-  if (content.transform && threads != 1) {
-    // Version 4 on threads: each clip in runs of as many frames as begin_clip would reserve (so memory still grows
-    // only as far as the frames before have decoded), each run's blocks side by side (decode_frames).
-    clips.assign(content.clip_frames.size(), FrameSequence());
-    for (size_t c = 0, frame = 0; c < clips.size(); ++c) {
-      FrameSequence& clip = clips[c];
-      clip.vertex_count = content.vertex_count;
-      clip.frame_count = content.clip_frames[c];
-      for (size_t f = 0; f < clip.frame_count;) {
-        const size_t run = std::max(std::min(begin_clip(c, frame) / std::max<size_t>(frame_floats, 1),
-                                             clip.frame_count - f),
-                                    std::min(decoder.block_frames(), clip.frame_count - f));
-        clip.positions.resize((f + run) * frame_floats);
-        SEGMORPH_RETURN_IF_ERROR(decoder.decode_frames(run, clip.positions.data() + f * frame_floats, threads));
-        f += run, frame += run;
-      }
-    }
-    return Status::Ok();
-  }
+  // Version 4 on threads: runs of at most 64 MiB of frames (frames_to_reserve's cap, so memory still grows only as
+  // far as the frames before have decoded), each run's blocks side by side (decode_frames).
+  const bool threaded = content.transform && threads != 1;
+  const size_t block =
+      threaded ? std::max(decoder.block_frames(),
+                          frames_to_reserve(content.frame_count(), bound, frame_floats * sizeof(float)))
+               : decoder.block_frames();
   auto append = [&](size_t, size_t count, std::vector<float>& positions) {
-    return decoder.decode_append(count, positions);
+    if (!threaded) return decoder.decode_append(count, positions);
+    const size_t at = positions.size();
+    positions.resize(at + count * frame_floats);
+    return decoder.decode_frames(count, positions.data() + at, threads);
   };
-  return collect_clips(content, decoder.block_frames(), begin_clip, append, clips);
+  return collect_clips(content, block, begin_clip, append, clips);
 }
 
 }  // namespace segmorph

@@ -103,13 +103,13 @@ Eigen::MatrixXd LargestEigenvectors::vectors(Eigen::Index count) const {
   const Eigen::Index n = values_.size();
   count = std::clamp<Eigen::Index>(count, 0, n);
   const Eigen::VectorXd diagonal = reduction_.diagonal(), off = reduction_.subDiagonal();
+  // Many vectors: the QR iterations' own, the rotations accumulated (their cost no longer falls with the count).
+  if (count > n / kMostByIteration) return all_vectors(diagonal, off, count);
   double norm = 0;  // the tridiagonal matrix's 1-norm
   for (Eigen::Index i = 0; i < n; ++i)
     norm = std::max(norm, std::fabs(diagonal(i)) + (i > 0 ? std::fabs(off(i - 1)) : 0.0) +
                               (i + 1 < n ? std::fabs(off(i)) : 0.0));
   Eigen::MatrixXd tridiagonal_vectors(n, count);
-  // Many vectors: the QR iterations' own, the rotations accumulated (their cost no longer falls with the count).
-  if (count > n / kMostByIteration) return all_vectors(diagonal, off, count);
   const double epsilon = std::numeric_limits<double>::epsilon();
   const double tiny = (norm > 0 ? norm : 1.0) * epsilon;  // a zero matrix: any orthonormal vectors
   Eigen::Index cluster_first = 0;

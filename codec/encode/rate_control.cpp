@@ -55,6 +55,7 @@ class RateControlDriver {
   bool keep_references();
   bool references_rejected();
   size_t side_bytes();
+  size_t side_bytes_of(const StreamContent& content) const;
   void clear_residuals() {
     content_.residuals.clear();
     content_.narrow_residuals.clear();
@@ -191,9 +192,7 @@ void RateControlDriver::choose_motion_coding() {
   parallel_items(options.size(), thread_count(settings_.threads), [&](size_t i) {
     StreamContent trial = content_;
     trial.flags = options[i];
-    std::vector<uint8_t> side;
-    write_stream(trial, p_.base, side);
-    bytes[i] = side.size();
+    bytes[i] = side_bytes_of(trial);
   });
   size_t best = bytes[0];
   uint8_t best_flags = options[0];
@@ -255,8 +254,13 @@ bool RateControlDriver::keep_references() {
 // Bytes of the stream without residuals (header, welding, labels, motion, weights).
 size_t RateControlDriver::side_bytes() {
   clear_residuals();
+  return side_bytes_of(content_);
+}
+
+// Bytes of the stream of `content`, whose residuals are cleared.
+size_t RateControlDriver::side_bytes_of(const StreamContent& content) const {
   std::vector<uint8_t> side;
-  write_stream(content_, p_.base, side);
+  write_stream(content, p_.base, side);
   return side.size();
 }
 
