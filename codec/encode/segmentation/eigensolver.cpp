@@ -245,6 +245,135 @@ Status shift_invert_eigenpairs(const SparseMatrix& stiffness, const Eigen::Vecto
   }
 }
 
+// Aggregates of the graph of K (its off-diagonal pattern: the mesh's edges): vertices in index order, each one not yet
+// in an aggregate starts one of the vertices not yet in one within `radius` edges of it (breadth first). Returns the
+// aggregate of every vertex; `count` receives how many there are.
+std::vector<int32_t> aggregate_vertices(const SparseMatrix& stiffness, int radius, Eigen::Index& count) {
+  const Eigen::Index n = stiffness.rows();
+  std::vector<int32_t> aggregate(size_t(n), -1);
+  std::vector<Eigen::Index> queue;
+  std::vector<int> depth(size_t(n), 0);
+  count = 0;
+  for (Eigen::Index seed = 0; seed < n; ++seed) {
+    if (aggregate[size_t(seed)] >= 0) continue;
+    const int32_t label = int32_t(count++);
+    queue.assign(1, seed);
+    aggregate[size_t(seed)] = label, depth[size_t(seed)] = 0;
+    for (size_t head = 0; head < queue.size(); ++head) {
+      const Eigen::Index v = queue[head];
+      if (depth[size_t(v)] == radius) continue;
+      for (SparseMatrix::InnerIterator it(stiffness, v); it; ++it) {
+        const Eigen::Index w = it.row();
+        if (aggregate[size_t(w)] >= 0) continue;
+        aggregate[size_t(w)] = label, depth[size_t(w)] = depth[size_t(v)] + 1;
+        queue.push_back(w);
+      }
+    }
+  }
+  return aggregate;
+}
+
+// Applies p(D⁻¹K) to the columns of `vectors`, p the Chebyshev polynomial of `degree` that is 1 at 0 and at most
+// 1 / T_degree((b + a) / (b − a)) in magnitude on [a, b] (Zhou & Saad's scaled three-term recurrence): components of
+// eigenvalues in [a, b] are damped by that factor, those well below a kept almost whole.
+void chebyshev_filter(const SparseMatrix& stiffness, const Eigen::VectorXd& inverse_diagonal, double a, double b,
+                      int degree, Eigen::MatrixXd& vectors) {
+  if (degree < 1 || !(b > a) || !(a > 0)) return;
+  const double e = (b - a) / 2, c = (b + a) / 2;
+  auto apply = [&](const Eigen::MatrixXd& x) -> Eigen::MatrixXd {
+    return inverse_diagonal.asDiagonal() * (stiffness * x) - c * x;
+  };
+  double sigma = -e / c;
+  const double tau = 2 / sigma;
+  Eigen::MatrixXd previous = std::move(vectors);
+  Eigen::MatrixXd current = apply(previous) * (sigma / e);
+  for (int i = 2; i <= degree; ++i) {
+    const double next_sigma = 1 / (tau - sigma);
+    Eigen::MatrixXd next = apply(current) * (2 * next_sigma / e) - (sigma * next_sigma) * previous;
+    previous = std::move(current);
+    current = std::move(next);
+    sigma = next_sigma;
+  }
+  vectors = std::move(current);
+}
+
+Status multilevel_eigenpairs(const SparseMatrix& stiffness, const Eigen::VectorXd& mass, Eigen::Index count,
+                             const EigenSettings& settings, Eigenpairs& out) {
+  const Eigen::Index n = stiffness.rows();
+  const Eigen::Index coarse_pairs = std::max<Eigen::Index>(2 * count, count + 8);
+  const Eigen::Index target =
+      std::max(Eigen::Index(std::min(settings.coarse_vertices, size_t(n) / 8)), 2 * coarse_pairs);
+  // The smallest radius whose aggregates are few enough.
+  Eigen::Index m = 0;
+  std::vector<int32_t> aggregate;
+  for (int radius = 1; radius <= 64; ++radius) {
+    aggregate = aggregate_vertices(stiffness, radius, m);
+    if (m <= target) break;
+  }
+  if (m < 2 * coarse_pairs || coarse_pairs >= n - 1) {
+    return shift_invert_eigenpairs(stiffness, mass, count, settings, out);
+  }
+  if (settings.progress)
+    settings.progress("eigenpairs: coarse problem of " + std::to_string(m) + " aggregates (" + std::to_string(n) +
+                      " vertices)");
+
+  // Damped Jacobi on K: ωD⁻¹ with D = diag(K), ω = 4 / (3ρ), ρ Gershgorin's bound on the spectral radius of D⁻¹K.
+  const Eigen::VectorXd diagonal = stiffness.diagonal();
+  double rho = 0;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    double sum = 0;
+    for (SparseMatrix::InnerIterator it(stiffness, j); it; ++it) sum += std::fabs(it.value());
+    if (diagonal[j] > 0) rho = std::max(rho, sum / diagonal[j]);
+  }
+  if (!(rho > 0) || !std::isfinite(rho)) {
+    return Status(StatusCode::numerical, "eigensolver: the stiffness matrix has no positive finite diagonal (" +
+                                             std::to_string(n) + " vertices)");
+  }
+  Eigen::VectorXd inverse_diagonal(n);  // 0 where a vertex has no stiffness: the smoothing leaves it alone
+  for (Eigen::Index i = 0; i < n; ++i) inverse_diagonal[i] = diagonal[i] > 0 ? 1 / diagonal[i] : 0.0;
+
+  // P = (I − ωD⁻¹K) P₀, the coarse problem PᵀKP ψ = λ M_c ψ.
+  std::vector<Eigen::Triplet<double>> indicator;
+  indicator.reserve(size_t(n));
+  for (Eigen::Index i = 0; i < n; ++i) indicator.emplace_back(i, aggregate[size_t(i)], 1.0);
+  SparseMatrix tentative(n, m);
+  tentative.setFromTriplets(indicator.begin(), indicator.end());
+  aggregate = {};
+  const Eigen::VectorXd jacobi = (4.0 / (3.0 * rho)) * inverse_diagonal;
+  const SparseMatrix prolongation = tentative - SparseMatrix(jacobi.asDiagonal() * (stiffness * tentative));
+  const SparseMatrix coarse_stiffness = SparseMatrix(prolongation.transpose()) * (stiffness * prolongation);
+  const Eigen::VectorXd coarse_mass = tentative.transpose() * mass;  // PᵀM1 = P₀ᵀM1 since K1 = 0
+  EigenSettings coarse_settings = settings;
+  coarse_settings.method = EigenMethod::automatic;
+  coarse_settings.multilevel_limit = size_t(-1);
+  Eigenpairs coarse;
+  SEGMORPH_RETURN_IF_ERROR(
+      smallest_eigenpairs(coarse_stiffness, coarse_mass, size_t(coarse_pairs), coarse, coarse_settings));
+
+  // Carried back, filtered (the pass band up to twice the largest Rayleigh quotient of D⁻¹K among them), Ritz pairs.
+  if (settings.progress)
+    settings.progress("eigenpairs: carrying back and filtering (" + std::to_string(n) + " vertices)");
+  out.vectors = prolongation * coarse.vectors;
+  double band = 0;
+  for (Eigen::Index j = 0; j < out.vectors.cols(); ++j) {
+    const double energy = out.vectors.col(j).dot(stiffness * out.vectors.col(j));
+    band = std::max(band, energy / out.vectors.col(j).cwiseAbs2().dot(diagonal));
+  }
+  chebyshev_filter(stiffness, inverse_diagonal, 2 * band, rho, settings.filter_degree, out.vectors);
+  for (Eigen::Index j = 0; j < out.vectors.cols(); ++j) {
+    const double norm = std::sqrt(out.vectors.col(j).cwiseAbs2().dot(mass));
+    if (!(norm > 0) || !std::isfinite(norm)) {
+      return Status(StatusCode::numerical,
+                    "eigensolver: a carried-back vector vanished (" + std::to_string(n) + " vertices)");
+    }
+    out.vectors.col(j) /= norm;
+  }
+  SEGMORPH_RETURN_IF_ERROR(rayleigh_ritz(stiffness, mass, out));
+  out.values.conservativeResize(count);
+  out.vectors.conservativeResize(Eigen::NoChange, count);
+  return Status::Ok();
+}
+
 // Values below 0 to 0; each vector's entry of largest magnitude positive (the first on ties).
 void normalize(Eigenpairs& pairs) {
   pairs.values = pairs.values.cwiseMax(0.0);
@@ -270,8 +399,13 @@ Status smallest_eigenpairs(const SparseMatrix& stiffness, const Eigen::VectorXd&
     out.vectors.resize(n, 0);
     return Status::Ok();
   }
-  bool dense = settings.method == EigenMethod::dense;
-  if (settings.method == EigenMethod::automatic) dense = size_t(n) <= settings.dense_limit || 2 * wanted >= n;
+  EigenMethod method = settings.method;
+  if (method == EigenMethod::automatic) {
+    method = size_t(n) <= settings.dense_limit || 2 * wanted >= n ? EigenMethod::dense
+             : size_t(n) > settings.multilevel_limit              ? EigenMethod::multilevel
+                                                                  : EigenMethod::shift_invert;
+  }
+  const bool dense = method == EigenMethod::dense;
   if (!dense && wanted >= n - 1) {
     return Status(StatusCode::invalid_argument,
                   "eigensolver: shift-invert finds at most W - 2 = " + std::to_string(n - 2) + " eigenpairs, " +
@@ -279,8 +413,9 @@ Status smallest_eigenpairs(const SparseMatrix& stiffness, const Eigen::VectorXd&
   }
   Status status;
   try {
-    status = dense ? dense_eigenpairs(stiffness, mass, wanted, out)
-                   : shift_invert_eigenpairs(stiffness, mass, wanted, settings, out);
+    status = dense                                ? dense_eigenpairs(stiffness, mass, wanted, out)
+             : method == EigenMethod::multilevel ? multilevel_eigenpairs(stiffness, mass, wanted, settings, out)
+                                                 : shift_invert_eigenpairs(stiffness, mass, wanted, settings, out);
   } catch (const std::bad_alloc&) {
     status = Status(StatusCode::numerical, "eigensolver: out of memory (" + std::to_string(n) + " vertices)");
   }
