@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 
 #include "encode/segmentation/laplacian.h"
 #include "test_meshes.h"
@@ -45,6 +46,30 @@ TEST(Diffusion, FeaturePointsOfAnElongatedShapeAreItsTips) {
     }
   }
   EXPECT_LT(slice_high - slice_low, 0.15 * (high - low));
+}
+
+// GeodesicBall gives edge_path_distances' distances, bit for bit, within the limit (and nothing beyond it), call
+// after call on one instance.
+TEST(Diffusion, GeodesicBallsMatchTheWholeMeshSearch) {
+  const FrameSequence clip = stretched_sphere(3, 2.0);
+  const WeldedTopology topology = weld_topology({clip});
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  const std::vector<double> positions = welded_positions(clip.frame(0), topology);
+  GeodesicBall ball(positions, adjacency);
+  for (const auto& [source, limit] : {std::pair(0u, 0.5), std::pair(100u, 1.5), std::pair(7u, 0.2),
+                                      std::pair(300u, double(INFINITY)), std::pair(0u, 0.5)}) {
+    const std::vector<double> whole = edge_path_distances(positions, adjacency, source, limit);
+    const std::vector<uint32_t>& reached = ball.reach(source, limit);
+    ASSERT_FALSE(reached.empty());
+    EXPECT_EQ(reached.front(), source);
+    size_t within = 0;
+    for (size_t v = 0; v < whole.size(); ++v) {
+      within += std::isfinite(whole[v]);
+      EXPECT_EQ(ball.distance(uint32_t(v)), whole[v]) << "source " << source << " vertex " << v;
+    }
+    EXPECT_EQ(reached.size(), within) << "source " << source;
+    EXPECT_GT(within, 1u);
+  }
 }
 
 TEST(Diffusion, ComponentsAreTreatedSeparately) {

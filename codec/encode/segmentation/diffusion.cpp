@@ -42,6 +42,34 @@ std::vector<double> edge_path_distances(const std::vector<double>& positions, co
   return distance;
 }
 
+GeodesicBall::GeodesicBall(const std::vector<double>& positions, const VertexAdjacency& adjacency)
+    : positions_(positions), adjacency_(adjacency), distance_(adjacency.offset.size() - 1, INFINITY) {}
+
+// edge_path_distances' search, its pushes and pops in the same order.
+const std::vector<uint32_t>& GeodesicBall::reach(uint32_t source, double limit) {
+  for (uint32_t v : reached_) distance_[v] = INFINITY;
+  reached_.assign(1, source);
+  using Entry = std::pair<double, uint32_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  distance_[source] = 0;
+  queue.push({0, source});
+  while (!queue.empty()) {
+    const auto [d, u] = queue.top();
+    queue.pop();
+    if (d > distance_[u]) continue;
+    for (uint32_t i = adjacency_.offset[u]; i < adjacency_.offset[u + 1]; ++i) {
+      const uint32_t w = adjacency_.neighbour[i];
+      const double candidate = d + edge_length(positions_, u, w);
+      if (candidate < distance_[w] && candidate <= limit) {
+        if (distance_[w] == INFINITY) reached_.push_back(w);
+        distance_[w] = candidate;
+        queue.push({candidate, w});
+      }
+    }
+  }
+  return reached_;
+}
+
 Status diffusion_morse_function(const std::vector<double>& positions, const WeldedTopology& topology,
                                 const VertexAdjacency& adjacency, const DiffusionSettings& settings,
                                 MorseFunction& out) {

@@ -53,4 +53,21 @@ Status diffusion_morse_function(const std::vector<double>& positions, const Weld
 std::vector<double> edge_path_distances(const std::vector<double>& positions, const VertexAdjacency& adjacency,
                                         uint32_t source, double limit = INFINITY);
 
+// Edge-path distances within a limit of one source after another, each in time proportional to the vertices it
+// reaches (edge_path_distances clears and returns a distance for every welded vertex): the same distances, bit for bit.
+class GeodesicBall {
+ public:
+  GeodesicBall(const std::vector<double>& positions, const VertexAdjacency& adjacency);
+  // The vertices within `limit` of `source` (the source first), in the order they were reached; their distances by
+  // distance(). Valid until the next call.
+  const std::vector<uint32_t>& reach(uint32_t source, double limit);
+  double distance(uint32_t vertex) const { return distance_[vertex]; }
+
+ private:
+  const std::vector<double>& positions_;
+  const VertexAdjacency& adjacency_;
+  std::vector<double> distance_;  // W, infinity but for the vertices reached by the last call
+  std::vector<uint32_t> reached_;
+};
+
 }  // namespace segmorph

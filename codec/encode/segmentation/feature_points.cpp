@@ -19,6 +19,9 @@ uint32_t farthest(const std::vector<double>& distance, const std::vector<uint32_
 
 std::vector<uint32_t> maxima(const std::vector<double>& f, const std::vector<uint32_t>& vertices,
                              const std::vector<double>& positions, const VertexAdjacency& adjacency, double radius) {
+  std::vector<uint8_t> in_component(f.size(), 0);
+  for (uint32_t v : vertices) in_component[v] = 1;
+  GeodesicBall ball(positions, adjacency);
   std::vector<uint32_t> found;
   for (uint32_t v : vertices) {
     bool ring_maximum = true;  // cheap first test: the 1-ring
@@ -27,13 +30,10 @@ std::vector<uint32_t> maxima(const std::vector<double>& f, const std::vector<uin
       ring_maximum = f[u] < f[v] || (f[u] == f[v] && v < u);
     }
     if (!ring_maximum) continue;
-    const std::vector<double> near = edge_path_distances(positions, adjacency, v, radius);
-    bool maximum = true;
-    for (uint32_t u : vertices)
-      if (near[u] <= radius && u != v && (f[u] > f[v] || (f[u] == f[v] && u < v))) {
-        maximum = false;
-        break;
-      }
+    const std::vector<uint32_t>& near = ball.reach(v, radius);
+    const bool maximum = std::none_of(near.begin(), near.end(), [&](uint32_t u) {
+      return in_component[u] && u != v && (f[u] > f[v] || (f[u] == f[v] && u < v));
+    });
     if (maximum) found.push_back(v);
   }
   return found;
@@ -52,10 +52,12 @@ std::vector<uint32_t> feature_points(const std::vector<double>& f1, const std::v
                                      const std::array<uint32_t, 2>& farthest) {
   const std::vector<uint32_t> e1 = maxima(f1, vertices, positions, adjacency, radius);
   const std::vector<uint32_t> e2 = maxima(f2, vertices, positions, adjacency, radius);
+  GeodesicBall ball(positions, adjacency);
   std::vector<uint32_t> features;
   for (uint32_t p : e1) {
-    const std::vector<double> near = edge_path_distances(positions, adjacency, p, radius);
-    if (std::any_of(e2.begin(), e2.end(), [&](uint32_t q) { return near[q] <= radius; })) features.push_back(p);
+    ball.reach(p, radius);
+    const bool near = std::any_of(e2.begin(), e2.end(), [&](uint32_t q) { return ball.distance(q) <= radius; });
+    if (near) features.push_back(p);
   }
   if (features.empty()) features = {farthest[0], farthest[1]};
   return features;
