@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <iterator>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -25,6 +28,19 @@ constexpr double kReferenceMinGain = 0.99;
 
 // Other motion step ratios tried with an error target (which one wins depends on the sequence: docs/codec.md).
 constexpr double kMotionStepRatioTrials[] = {0.25, 1.0};
+
+// The candidate steps (raised to the finest step) that `curves` has not measured yet, each once.
+void unmeasured_steps(const std::vector<double> (&candidates)[3], const SubbandCurve (&curves)[3], double finest_step,
+                      std::vector<double> (&steps)[3]) {
+  for (int axis = 0; axis < 3; ++axis)
+    for (double candidate : candidates[axis]) {
+      const double step = std::max(candidate, finest_step);
+      const std::vector<double>& measured = curves[axis].step;
+      if (std::find(measured.begin(), measured.end(), double(float(step))) == measured.end() &&
+          std::find(steps[axis].begin(), steps[axis].end(), step) == steps[axis].end())
+        steps[axis].push_back(step);
+    }
+}
 
 class RateControlDriver {
  public:
@@ -90,14 +106,7 @@ class RateControlDriver {
 // curves, all in one walk.
 void RateControlDriver::extend(const std::vector<double> (&candidates)[3]) {
   std::vector<double> steps[3];
-  for (int axis = 0; axis < 3; ++axis)
-    for (double candidate : candidates[axis]) {
-      const double step = std::max(candidate, p_.finest_step);
-      const std::vector<double>& measured = curves_[axis].step;
-      if (std::find(measured.begin(), measured.end(), double(float(step))) == measured.end() &&
-          std::find(steps[axis].begin(), steps[axis].end(), step) == steps[axis].end())
-        steps[axis].push_back(step);
-    }
+  unmeasured_steps(candidates, curves_, p_.finest_step, steps);
   const std::string stage =
       "rate control: measuring " + std::to_string(steps[0].size() + steps[1].size() + steps[2].size()) + " steps";
   report_progress(settings_, stage, 0);
@@ -304,22 +313,43 @@ void RateControlDriver::choose_motion_step_ratio() {
   const StepChoice first = choice_;
   double best_ratio = kMotionStepRatio, best_bytes = double(side_bytes()) + choice_.bits / 8;
   SubbandCurve best_curves[3] = {curves_[0], curves_[1], curves_[2]};
-  const SubbandCurve first_curves[3] = {curves_[0], curves_[1], curves_[2]};
-  for (double ratio : kMotionStepRatioTrials) {
-    prepare_motion(ratio * guess);
-    const auto begin = EncodeClock::now();
-    std::vector<double> near[3];
-    for (int axis = 0; axis < 3; ++axis) {
-      curves_[axis] = SubbandCurve();
-      for (int j = -1; j <= 1; ++j) near[axis].push_back(first_curves[axis].step[first.index[axis]] * std::exp2(j / 4.0));
-    }
-    extend(near);
-    const StepChoice trial = choose();
-    report_.ms_rate_control += milliseconds_since(begin);
-    const double bytes = double(side_bytes()) + trial.bits / 8;
+  // The other ratios' motion, each measured at the steps around the first's choice: side by side, each trial's walk
+  // on its share of the threads (a walk's curves do not depend on how many threads it has).
+  struct Trial {
+    StreamContent content;
+    std::unique_ptr<FramePredictions> predictions;
+    size_t side_bytes = 0;
+    SubbandCurve curves[3];
+  };
+  constexpr size_t kTrials = std::size(kMotionStepRatioTrials);
+  std::vector<Trial> trials(kTrials);
+  for (size_t t = 0; t < kTrials; ++t) {
+    prepare_motion(kMotionStepRatioTrials[t] * guess);
+    trials[t].side_bytes = side_bytes();
+    trials[t].content = content_;
+    trials[t].predictions = std::make_unique<FramePredictions>(trials[t].content, p_.base_welded);
+  }
+  const auto begin = EncodeClock::now();
+  std::vector<double> around[3], near[3];
+  for (int axis = 0; axis < 3; ++axis)
+    for (int j = -1; j <= 1; ++j) around[axis].push_back(curves_[axis].step[first.index[axis]] * std::exp2(j / 4.0));
+  unmeasured_steps(around, {}, p_.finest_step, near);
+  const std::string stage = "rate control: measuring " + std::to_string(kTrials) + " motion steps";
+  report_progress(settings_, stage, 0);
+  const size_t threads = thread_count(settings_.threads);
+  parallel_items(kTrials, threads, [&](size_t t) {
+    std::function<void(double)> progress;
+    if (t == 0) progress = [&](double fraction) { report_progress(settings_, stage, fraction); };
+    measure_subbands(trials[t].content, p_.traversal, *trials[t].predictions, p_.trajectories.positions,
+                     p_.multiplicity, near, trials[t].curves, std::max<size_t>(threads / kTrials, 1), progress);
+  });
+  report_.ms_rate_control += milliseconds_since(begin);
+  for (size_t t = 0; t < kTrials; ++t) {
+    const StepChoice trial = steps_for_distortion(trials[t].curves, p_.max_distortion());
+    const double bytes = double(trials[t].side_bytes) + trial.bits / 8;
     if (trial.distortion <= p_.max_distortion() && bytes < best_bytes) {
-      best_bytes = bytes, best_ratio = ratio;
-      for (int axis = 0; axis < 3; ++axis) best_curves[axis] = curves_[axis];
+      best_bytes = bytes, best_ratio = kMotionStepRatioTrials[t];
+      for (int axis = 0; axis < 3; ++axis) best_curves[axis] = trials[t].curves[axis];
     }
   }
   prepare_motion(best_ratio * guess);
