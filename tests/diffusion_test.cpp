@@ -69,6 +69,17 @@ TEST(Diffusion, GeodesicBallsMatchTheWholeMeshSearch) {
     }
     EXPECT_EQ(reached.size(), within) << "source " << source;
     EXPECT_GT(within, 1u);
+    // A search told to stop at a vertex within the limit stops there; at one beyond it, it reaches all the rest.
+    const uint32_t inside = reached.back();
+    uint32_t outside = source;
+    for (size_t v = 0; v < whole.size(); ++v)
+      if (!std::isfinite(whole[v])) outside = uint32_t(v);
+    EXPECT_EQ(ball.reach(source, limit, [&](uint32_t v) { return v == inside; }).back(), inside);
+    EXPECT_TRUE(ball.stopped());
+    if (outside != source) {
+      EXPECT_EQ(ball.reach(source, limit, [&](uint32_t v) { return v == outside; }).size(), within);
+      EXPECT_FALSE(ball.stopped());
+    }
   }
 }
 

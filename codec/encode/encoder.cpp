@@ -102,6 +102,7 @@ Status segment_first_frame(const EncodeProblem& p, std::vector<Clusters>& segmen
   report_progress(p.settings, "segmentation: heat diffusion (" + std::to_string(p.welded) + " vertices)");
   DiffusionSettings diffusion;
   diffusion.progress = [&](const std::string& step) { report_progress(p.settings, "segmentation: " + step); };
+  diffusion.threads = p.settings.threads;
   MorseFunction morse;
   SEGMORPH_RETURN_IF_ERROR(diffusion_morse_function(positions, p.topology, p.adjacency, diffusion, morse));
   MorseBands bands;

@@ -46,9 +46,15 @@ GeodesicBall::GeodesicBall(const std::vector<double>& positions, const VertexAdj
     : positions_(positions), adjacency_(adjacency), distance_(adjacency.offset.size() - 1, INFINITY) {}
 
 // edge_path_distances' search, its pushes and pops in the same order.
-const std::vector<uint32_t>& GeodesicBall::reach(uint32_t source, double limit) {
+const std::vector<uint32_t>& GeodesicBall::reach(uint32_t source, double limit,
+                                                 const std::function<bool(uint32_t)>& stop) {
   for (uint32_t v : reached_) distance_[v] = INFINITY;
   reached_.assign(1, source);
+  stopped_ = stop && stop(source);
+  if (stopped_) {
+    distance_[source] = 0;
+    return reached_;
+  }
   using Entry = std::pair<double, uint32_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
   distance_[source] = 0;
@@ -61,8 +67,15 @@ const std::vector<uint32_t>& GeodesicBall::reach(uint32_t source, double limit) 
       const uint32_t w = adjacency_.neighbour[i];
       const double candidate = d + edge_length(positions_, u, w);
       if (candidate < distance_[w] && candidate <= limit) {
-        if (distance_[w] == INFINITY) reached_.push_back(w);
+        const bool first = distance_[w] == INFINITY;
         distance_[w] = candidate;
+        if (first) {
+          reached_.push_back(w);
+          if (stop && stop(w)) {
+            stopped_ = true;
+            return reached_;
+          }
+        }
         queue.push({candidate, w});
       }
     }
@@ -81,6 +94,7 @@ Status diffusion_morse_function(const std::vector<double>& positions, const Weld
   ComponentSpectra spectra;
   EigenSettings eigen_settings;
   eigen_settings.progress = settings.progress;
+  eigen_settings.threads = settings.threads;
   SEGMORPH_RETURN_IF_ERROR(component_spectra(laplacian, topology, settings.eigenpairs, spectra, eigen_settings));
   if (settings.progress) settings.progress("feature points and the Morse function");
 

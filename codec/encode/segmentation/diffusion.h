@@ -34,6 +34,7 @@ struct DiffusionSettings {
   size_t eigenpairs = 40;  // per component, the constant one included
   double epsilon = 0.074;  // extremum neighbourhood, as a fraction of sqrt(component area)
   int time_samples = 24;   // log-spaced times of the integral over [t1, t2]
+  size_t threads = 1;      // for the eigenpairs (EigenSettings::threads); μ is the same for any number
   // Told each step ("eigenpairs: factorizing", "feature points", ...); empty: nothing.
   std::function<void(const std::string& step)> progress;
 };
@@ -59,8 +60,11 @@ class GeodesicBall {
  public:
   GeodesicBall(const std::vector<double>& positions, const VertexAdjacency& adjacency);
   // The vertices within `limit` of `source` (the source first), in the order they were reached; their distances by
-  // distance(). Valid until the next call.
-  const std::vector<uint32_t>& reach(uint32_t source, double limit);
+  // distance(). Valid until the next call. With `stop`, the search ends at the first vertex reached for which it is
+  // true (then the last one returned), and stopped() says so.
+  const std::vector<uint32_t>& reach(uint32_t source, double limit,
+                                     const std::function<bool(uint32_t vertex)>& stop = {});
+  bool stopped() const { return stopped_; }
   double distance(uint32_t vertex) const { return distance_[vertex]; }
 
  private:
@@ -68,6 +72,7 @@ class GeodesicBall {
   const VertexAdjacency& adjacency_;
   std::vector<double> distance_;  // W, infinity but for the vertices reached by the last call
   std::vector<uint32_t> reached_;
+  bool stopped_ = false;
 };
 
 }  // namespace segmorph

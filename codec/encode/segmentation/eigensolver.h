@@ -61,7 +61,9 @@ struct EigenSettings {
   // multilevel: the coarse problem has at most this many aggregates (and at least 8 vertices each on average).
   size_t coarse_vertices = 20000;
   // multilevel: degree of the Chebyshev filter applied to the carried-back vectors before the Rayleigh–Ritz step.
-  int filter_degree = 16;
+  int filter_degree = 32;
+  // multilevel: threads for the filter (0: every hardware thread); the pairs are the same for any number.
+  size_t threads = 1;
   // Spectra's convergence test: each Ritz value ν = 1/(λ − σ) has a residual below tolerance · |ν|.
   double tolerance = 1e-10;
   int max_restarts = 1000;  // implicit restarts of the Lanczos iteration before giving up
@@ -94,11 +96,11 @@ constexpr double kShiftAreaFraction = 1e-2;
 // more each), P₀ the aggregates' indicator functions and P = (I − ωD⁻¹K) P₀ (D = diag K, ω = 4 / (3ρ), ρ Gershgorin's
 // bound on the spectral radius of D⁻¹K). The coarse problem PᵀKP ψ = λ M_c ψ (M_c: each aggregate's mass; P keeps
 // constants, so the coarse operator has K's structure) is solved for max(2·count, count + 8) pairs; their vectors Pψ
-// are filtered by a Chebyshev polynomial of D⁻¹K of degree `filter_degree` (1 at 0, damping [2β, ρ], β the largest
-// Rayleigh quotient of D⁻¹K among them: what the coarse space cannot represent) and replaced by the Ritz pairs of K and
-// M on their span, of which the `count` smallest are returned: M-orthonormal vectors and their Rayleigh quotients,
-// which bound the true eigenvalues from above. A problem too small to coarsen (fewer than twice as many aggregates as
-// coarse pairs) is solved by shift_invert.
+// are filtered by a Chebyshev polynomial of D⁻¹K of degree `filter_degree` (1 at 0, damping [max(2β, ρm/n), ρ], β
+// the largest Rayleigh quotient of D⁻¹K among them, m/n aggregates per vertex: what the coarse space cannot represent)
+// and replaced by the Ritz pairs of K and M on their span, of which the `count` smallest are returned: M-orthonormal
+// vectors and their Rayleigh quotients, which bound the true eigenvalues from above. A problem too small to coarsen
+// (fewer than twice as many aggregates as coarse pairs) is solved by shift_invert.
 //
 // Fails with numerical when the Lanczos iteration does not converge, K − σM cannot be factorized, or
 // skipped eigenvalues are still missing after a few deflated restarts; with invalid_argument when

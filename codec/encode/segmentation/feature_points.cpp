@@ -30,11 +30,11 @@ std::vector<uint32_t> maxima(const std::vector<double>& f, const std::vector<uin
       ring_maximum = f[u] < f[v] || (f[u] == f[v] && v < u);
     }
     if (!ring_maximum) continue;
-    const std::vector<uint32_t>& near = ball.reach(v, radius);
-    const bool maximum = std::none_of(near.begin(), near.end(), [&](uint32_t u) {
+    // Ended by the first vertex within the radius that is larger (most are found within a few rings).
+    ball.reach(v, radius, [&](uint32_t u) {
       return in_component[u] && u != v && (f[u] > f[v] || (f[u] == f[v] && u < v));
     });
-    if (maximum) found.push_back(v);
+    if (!ball.stopped()) found.push_back(v);
   }
   return found;
 }
