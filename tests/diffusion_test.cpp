@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <utility>
 
+#include "encode/segmentation/feature_points.h"
 #include "encode/segmentation/laplacian.h"
 #include "test_meshes.h"
 
@@ -79,6 +81,41 @@ TEST(Diffusion, GeodesicBallsMatchTheWholeMeshSearch) {
     if (outside != source) {
       EXPECT_EQ(ball.reach(source, limit, [&](uint32_t v) { return v == outside; }).size(), within);
       EXPECT_FALSE(ball.stopped());
+    }
+  }
+}
+
+// maxima() (its searches end at the first larger vertex) against its definition written with whole-mesh searches (the
+// code it replaced): f with many ties (values in a few levels) and radii from less than an edge to the whole mesh.
+TEST(Diffusion, MaximaAreTheDefinitions) {
+  const FrameSequence clip = stretched_sphere(3, 2.0);
+  const WeldedTopology topology = weld_topology({clip});
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  const std::vector<double> positions = welded_positions(clip.frame(0), topology);
+  const size_t count = positions.size() / 3;
+  std::vector<uint32_t> vertices(count);
+  for (size_t v = 0; v < count; ++v) vertices[v] = uint32_t(v);
+  std::mt19937 random(5);
+  for (const int levels : {3, 1000}) {
+    std::vector<double> f(count);
+    for (double& value : f) value = double(random() % unsigned(levels));
+    for (const double radius : {0.05, 0.3, 1.0, double(INFINITY)}) {
+      std::vector<uint32_t> expected;
+      for (uint32_t v : vertices) {
+        bool ring_maximum = true;  // the 1-ring first, as maxima() does (a longer edge than the radius counts too)
+        for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i) {
+          const uint32_t u = adjacency.neighbour[i];
+          ring_maximum = ring_maximum && (f[u] < f[v] || (f[u] == f[v] && v < u));
+        }
+        if (!ring_maximum) continue;
+        const std::vector<double> near = edge_path_distances(positions, adjacency, v, radius);
+        bool maximum = true;
+        for (uint32_t u : vertices)
+          if (near[u] <= radius && u != v && (f[u] > f[v] || (f[u] == f[v] && u < v))) maximum = false;
+        if (maximum) expected.push_back(v);
+      }
+      EXPECT_EQ(maxima(f, vertices, positions, adjacency, radius), expected) << levels << " levels, radius " << radius;
+      EXPECT_FALSE(expected.empty());
     }
   }
 }

@@ -440,7 +440,8 @@ TEST(Eigensolver, MultilevelIsChosenAboveItsLimitAndFallsBackWhenTooSmall) {
                                     [](const std::string& step) { return step.find("coarse") != std::string::npos; });
     EXPECT_EQ(coarse, limit < 2562) << limit;
   }
-  // 2562 vertices make 320 aggregates at most: fewer than twice the 2 × 100 coarse pairs that 100 pairs need.
+  // 100 pairs take 200 coarse pairs, so at most 400 aggregates and no fewer than 400: the smallest radius that brings
+  // 2562 vertices to 400 or fewer leaves fewer (radius 1 leaves more), and the problem goes to shift-invert.
   const Eigenpairs exact = solve(laplacian, 100, EigenMethod::shift_invert);
   const Eigenpairs fallback = solve(laplacian, 100, EigenMethod::multilevel);
   ASSERT_EQ(fallback.values.size(), 100);

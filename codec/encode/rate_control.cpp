@@ -1,6 +1,8 @@
 #include "encode/rate_control.h"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -8,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "common/parallel.h"
 #include "common/reconstruction.h"
@@ -337,12 +340,23 @@ void RateControlDriver::choose_motion_step_ratio() {
   const std::string stage = "rate control: measuring " + std::to_string(kTrials) + " motion steps";
   report_progress(settings_, stage, 0);
   const size_t threads = thread_count(settings_.threads);
+  // The fraction told is the trials' mean, from the calling thread only, whichever trials it walks itself.
+  const std::thread::id caller = std::this_thread::get_id();
+  std::array<std::atomic<double>, kTrials> walked;
+  for (std::atomic<double>& fraction : walked) fraction.store(0, std::memory_order_relaxed);
   parallel_items(kTrials, threads, [&](size_t t) {
-    std::function<void(double)> progress;
-    if (t == 0) progress = [&](double fraction) { report_progress(settings_, stage, fraction); };
+    const bool calling = std::this_thread::get_id() == caller;
+    const std::function<void(double)> progress = [&, t, calling](double fraction) {
+      walked[t].store(fraction, std::memory_order_relaxed);
+      if (!calling) return;
+      double sum = 0;
+      for (const std::atomic<double>& each : walked) sum += each.load(std::memory_order_relaxed);
+      report_progress(settings_, stage, sum / kTrials);
+    };
     measure_subbands(trials[t].content, p_.traversal, *trials[t].predictions, p_.trajectories.positions,
                      p_.multiplicity, near, trials[t].curves, std::max<size_t>(threads / kTrials, 1), progress);
   });
+  report_progress(settings_, stage, 1);
   report_.ms_rate_control += milliseconds_since(begin);
   for (size_t t = 0; t < kTrials; ++t) {
     const StepChoice trial = steps_for_distortion(trials[t].curves, p_.max_distortion());

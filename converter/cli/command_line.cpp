@@ -140,7 +140,7 @@ const Option kOptions[] = {
      "restore the sampled frames bit for bit",
      [](CommandLine& line, const std::string&, double) { line.encode.mode = RateMode::lossless; }},
     {"--threads", "-t", "N", kEncode | kDecode, Kind::whole, 0, 1024, false, nullptr, 0,
-     "threads for the work that splits: encode's stages (the eigenvectors of meshes above 60,000 vertices, the "
+     "threads for the work that splits: encode's stages (the eigenvectors of mesh parts above 60,000 vertices, the "
      "cluster-count search, the motion fits, refinement and cluster weights, each frame's reference, rate control's "
      "measurements, the version-4 bases, the decodes and the comparison with the input at the end), decode's frames "
      "of version-4 streams; {range}; "

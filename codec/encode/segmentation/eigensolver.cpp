@@ -285,23 +285,24 @@ void chebyshev_filter(const SparseMatrix& stiffness, const Eigen::VectorXd& inve
                       int degree, size_t threads, Eigen::MatrixXd& vectors) {
   if (degree < 1 || !(b > a) || !(a > 0)) return;
   const double e = (b - a) / 2, c = (b + a) / 2;
-  auto apply = [&](const Eigen::MatrixXd& x) -> Eigen::MatrixXd {
-    return inverse_diagonal.asDiagonal() * (stiffness * x) - c * x;
-  };
-  const Eigen::Index columns = vectors.cols();
+  const Eigen::Index n = vectors.rows(), columns = vectors.cols();
   const size_t blocks = size_t((columns + kFilterBlock - 1) / kFilterBlock);
   parallel_items(blocks, thread_count(threads), [&](size_t block) {
     const Eigen::Index first = Eigen::Index(block) * kFilterBlock;
     const Eigen::Index width = std::min(kFilterBlock, columns - first);
+    // Four n × width buffers for the whole recurrence, rotated rather than allocated at every step.
+    Eigen::MatrixXd previous = vectors.middleCols(first, width), current(n, width), next(n, width), product(n, width);
     double sigma = -e / c;
     const double tau = 2 / sigma;
-    Eigen::MatrixXd previous = vectors.middleCols(first, width);
-    Eigen::MatrixXd current = apply(previous) * (sigma / e);
+    product.noalias() = stiffness * previous;
+    current = (inverse_diagonal.asDiagonal() * product - c * previous) * (sigma / e);
     for (int i = 2; i <= degree; ++i) {
       const double next_sigma = 1 / (tau - sigma);
-      Eigen::MatrixXd next = apply(current) * (2 * next_sigma / e) - (sigma * next_sigma) * previous;
-      previous = std::move(current);
-      current = std::move(next);
+      product.noalias() = stiffness * current;
+      next = (inverse_diagonal.asDiagonal() * product - c * current) * (2 * next_sigma / e) -
+             (sigma * next_sigma) * previous;
+      previous.swap(current);
+      current.swap(next);
       sigma = next_sigma;
     }
     vectors.middleCols(first, width) = current;
@@ -321,9 +322,8 @@ Status multilevel_eigenpairs(const SparseMatrix& stiffness, const Eigen::VectorX
     aggregate = aggregate_vertices(stiffness, radius, m);
     if (m <= target) break;
   }
-  if (m < 2 * coarse_pairs || coarse_pairs >= n - 1) {
-    return shift_invert_eigenpairs(stiffness, mass, count, settings, out);
-  }
+  // Too few aggregates for the coarse pairs, or (a graph no radius up to 64 coarsens enough) too many to be cheap.
+  if (m < 2 * coarse_pairs || m > target) return shift_invert_eigenpairs(stiffness, mass, count, settings, out);
   if (settings.progress)
     settings.progress("eigenpairs: coarse problem of " + std::to_string(m) + " aggregates (" + std::to_string(n) +
                       " vertices)");
@@ -353,7 +353,9 @@ Status multilevel_eigenpairs(const SparseMatrix& stiffness, const Eigen::VectorX
   const Eigen::VectorXd jacobi = (4.0 / (3.0 * rho)) * inverse_diagonal;
   const SparseMatrix prolongation = tentative - SparseMatrix(jacobi.asDiagonal() * (stiffness * tentative));
   const SparseMatrix coarse_stiffness = SparseMatrix(prolongation.transpose()) * (stiffness * prolongation);
-  const Eigen::VectorXd coarse_mass = tentative.transpose() * mass;  // PᵀM1 = P₀ᵀM1 since K1 = 0
+  // M_c: the aggregates' masses, P₀ᵀM1, a lumped stand-in for PᵀMP (positive, and exact on constants' total mass);
+  // the Ritz step on the whole mesh's K and M below makes the pairs those of the span, whatever the coarse mass was.
+  const Eigen::VectorXd coarse_mass = tentative.transpose() * mass;
   EigenSettings coarse_settings = settings;
   coarse_settings.method = EigenMethod::automatic;
   coarse_settings.multilevel_limit = size_t(-1);

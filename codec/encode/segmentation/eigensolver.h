@@ -56,13 +56,16 @@ enum class EigenMethod {
 struct EigenSettings {
   EigenMethod method = EigenMethod::automatic;
   size_t dense_limit = 300;  // vertices
-  // automatic: above this many vertices, multilevel (the shared samples and sequences all stay below it).
+  // automatic: above this many vertices (of a component: component_spectra solves each on its own), multilevel (the
+  // shared samples and sequences all stay below it).
   size_t multilevel_limit = 60000;
-  // multilevel: the coarse problem has at most this many aggregates (and at least 8 vertices each on average).
+  // multilevel: the coarse problem has at most this many aggregates (and at least 8 vertices each on average, and at
+  // least twice as many aggregates as coarse pairs), else the problem is solved by shift_invert.
   size_t coarse_vertices = 20000;
   // multilevel: degree of the Chebyshev filter applied to the carried-back vectors before the Rayleigh–Ritz step.
   int filter_degree = 32;
-  // multilevel: threads for the filter (0: every hardware thread); the pairs are the same for any number.
+  // multilevel: threads for the filter (0: every hardware thread; it works on blocks of 8 vectors, so at most
+  // count / 4 threads have work); the pairs are the same for any number.
   size_t threads = 1;
   // Spectra's convergence test: each Ritz value ν = 1/(λ − σ) has a residual below tolerance · |ν|.
   double tolerance = 1e-10;
@@ -100,7 +103,8 @@ constexpr double kShiftAreaFraction = 1e-2;
 // the largest Rayleigh quotient of D⁻¹K among them, m/n aggregates per vertex: what the coarse space cannot represent)
 // and replaced by the Ritz pairs of K and M on their span, of which the `count` smallest are returned: M-orthonormal
 // vectors and their Rayleigh quotients, which bound the true eigenvalues from above. A problem too small to coarsen
-// (fewer than twice as many aggregates as coarse pairs) is solved by shift_invert.
+// (fewer than twice as many aggregates as coarse pairs), or one no radius up to 64 coarsens to the target, is solved
+// by shift_invert.
 //
 // Fails with numerical when the Lanczos iteration does not converge, K − σM cannot be factorized, or
 // skipped eigenvalues are still missing after a few deflated restarts; with invalid_argument when
