@@ -21,31 +21,15 @@ double edge_length(const std::vector<double>& positions, uint32_t a, uint32_t b)
 
 std::vector<double> edge_path_distances(const std::vector<double>& positions, const VertexAdjacency& adjacency,
                                         uint32_t source, double limit) {
-  std::vector<double> distance(adjacency.offset.size() - 1, INFINITY);
-  using Entry = std::pair<double, uint32_t>;
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-  distance[source] = 0;
-  queue.push({0, source});
-  while (!queue.empty()) {
-    const auto [d, u] = queue.top();
-    queue.pop();
-    if (d > distance[u]) continue;
-    for (uint32_t i = adjacency.offset[u]; i < adjacency.offset[u + 1]; ++i) {
-      const uint32_t w = adjacency.neighbour[i];
-      const double candidate = d + edge_length(positions, u, w);
-      if (candidate < distance[w] && candidate <= limit) {
-        distance[w] = candidate;
-        queue.push({candidate, w});
-      }
-    }
-  }
-  return distance;
+  GeodesicBall ball(positions, adjacency);
+  ball.reach(source, limit);
+  return std::move(ball).distances();
 }
 
 GeodesicBall::GeodesicBall(const std::vector<double>& positions, const VertexAdjacency& adjacency)
     : positions_(positions), adjacency_(adjacency), distance_(adjacency.offset.size() - 1, INFINITY) {}
 
-// edge_path_distances' search, its pushes and pops in the same order.
+// Dijkstra's search over the edges, ended at `limit` (or at the first vertex `stop` accepts).
 const std::vector<uint32_t>& GeodesicBall::reach(uint32_t source, double limit,
                                                  const std::function<bool(uint32_t)>& stop) {
   for (uint32_t v : reached_) distance_[v] = INFINITY;

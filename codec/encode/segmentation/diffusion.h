@@ -55,7 +55,7 @@ std::vector<double> edge_path_distances(const std::vector<double>& positions, co
                                         uint32_t source, double limit = INFINITY);
 
 // Edge-path distances within a limit of one source after another, each in time proportional to the vertices it
-// reaches (edge_path_distances clears and returns a distance for every welded vertex): the same distances, bit for bit.
+// reaches (edge_path_distances, which runs one, returns a distance for every welded vertex).
 class GeodesicBall {
  public:
   GeodesicBall(const std::vector<double>& positions, const VertexAdjacency& adjacency);
@@ -66,6 +66,8 @@ class GeodesicBall {
                                      const std::function<bool(uint32_t vertex)>& stop = {});
   bool stopped() const { return stopped_; }
   double distance(uint32_t vertex) const { return distance_[vertex]; }
+  // Every welded vertex's distance from the last call's source (infinity where not reached), taken from the ball.
+  std::vector<double> distances() && { return std::move(distance_); }
 
  private:
   const std::vector<double>& positions_;
