@@ -17,13 +17,11 @@ namespace {
 struct EntropyCounter {
   static constexpr int64_t kRange = 512;  // symbols in [−512, 512] are counted; larger ones are estimated
   std::vector<uint32_t> counts = std::vector<uint32_t>(3 * (2 * kRange + 1), 0);
-  double total[3] = {0, 0, 0};
   double large_bits = 0;
 
   void add(int context, int64_t symbol) {
     if (symbol >= -kRange && symbol <= kRange) {
       counts[size_t(context * (2 * kRange + 1) + (symbol + kRange))] += 1;
-      total[context] += 1;
     } else {
       // Length class and leading bits adaptive, the rest raw: about 2 log2|k| bits.
       large_bits += 2 * std::log2(double(symbol < 0 ? -symbol : symbol)) + 2;
@@ -31,6 +29,12 @@ struct EntropyCounter {
   }
   double bits() const {
     double sum = large_bits;
+    double total[3] = {0, 0, 0};  // symbols counted per context (exact: far below 2^53)
+    for (int c = 0; c < 3; ++c) {
+      uint64_t symbols = 0;
+      for (int64_t j = 0; j < 2 * kRange + 1; ++j) symbols += counts[size_t(c * (2 * kRange + 1) + j)];
+      total[c] = double(symbols);
+    }
     for (int c = 0; c < 3; ++c) {
       if (total[c] == 0) continue;
       for (int64_t j = 0; j < 2 * kRange + 1; ++j) {
@@ -47,13 +51,16 @@ struct EntropyCounter {
 constexpr double kIndexLimit = 1 << 30;
 
 // One vertex at `count` lanes (an axis and a step each): the residual quantized as the encoder does
-// (quantizer_index, in a form the compiler vectorizes: indices are clamped to ±2^30, which only a step far too
-// small to ever be chosen reaches), the reconstructed residual, its change from `last` and the distortion of
+// (quantizer_index, in a form the compiler vectorizes without trapping math, codec/CMakeLists.txt: indices are clamped
+// to ±2^30, which only a step far too small to ever be chosen reaches), the reconstructed residual, its change from `last` and the distortion of
 // the reconstructed position.
-void quantize_lanes(size_t count, double weight, const double* __restrict p, const double* __restrict target,
-                    const double* __restrict r, const double* __restrict q, const double* __restrict inverse_q,
-                    const double* __restrict last, double* __restrict current, double* __restrict change,
-                    int32_t* __restrict symbol, double* __restrict distortion) {
+__attribute__((always_inline)) inline void quantize_lanes(size_t count, double weight, const double* __restrict p,
+                                                          const double* __restrict target, const double* __restrict r,
+                                                          const double* __restrict q,
+                                                          const double* __restrict inverse_q,
+                                                          const double* __restrict last, double* __restrict current,
+                                                          double* __restrict change, int32_t* __restrict symbol,
+                                                          double* __restrict distortion) {
   for (size_t s = 0; s < count; ++s) {
     double x = (target[s] - p[s] - r[s]) * inverse_q[s];
     x = std::min(std::max(x + std::copysign(0.5, x), -kIndexLimit), kIndexLimit);
@@ -67,6 +74,101 @@ void quantize_lanes(size_t count, double weight, const double* __restrict p, con
   }
 }
 
+// One frame of a walk: every array by position in the traversal, lane s of position i at i · lanes + s.
+struct FrameWalk {
+  const ResidualTraversal* traversal = nullptr;
+  size_t welded = 0, lanes = 0;
+  bool spatial = false;
+  const size_t* lane_axis = nullptr;
+  const double *q = nullptr, *inverse_q = nullptr;
+  const double *prediction = nullptr, *target = nullptr, *weight = nullptr;  // per position (× 3 by axis)
+  const double* reference = nullptr;  // the reference frame's reconstructed residuals, or zeros of `lanes` per position
+  bool zero_reference = false;        // reference holds `lanes` zeros only, for every position
+  const int32_t* previous_symbol = nullptr;
+  double *current = nullptr, *change = nullptr, *distortion = nullptr;
+  int32_t* current_symbol = nullptr;
+  EntropyCounter* entropy = nullptr;
+};
+
+// The walk of one frame at kLanes lanes (0: w.lanes, not known when compiled). A known lane count lets every
+// per-lane loop be unrolled: the arithmetic per lane is the same, in the same order.
+template <size_t kLanes>
+__attribute__((always_inline)) inline void walk_frame(const FrameWalk& w) {
+  const size_t count = kLanes ? kLanes : w.lanes;
+  double local[4 * (kLanes ? kLanes : 1)];       // a known count's per-lane values
+  std::vector<double> heap(kLanes ? 0 : 4 * count);  // any other's
+  double* const values = kLanes ? local : heap.data();
+  double *p = values, *target = values + count, *r = values + 2 * count, *sum = values + 3 * count;
+  const uint32_t* earlier_offset = w.traversal->earlier_offset.data();
+  const uint32_t* earlier = w.traversal->earlier.data();
+  for (size_t position = 0; position < w.welded; ++position) {
+    const uint32_t begin = earlier_offset[position], end = earlier_offset[position + 1];
+    const size_t at = position * count;
+    for (size_t s = 0; s < count; ++s) {
+      p[s] = w.prediction[position * 3 + w.lane_axis[s]];
+      target[s] = w.target[position * 3 + w.lane_axis[s]];
+    }
+    const double* last = w.zero_reference ? w.reference : &w.reference[at];
+    for (size_t s = 0; s < count; ++s) r[s] = last[s];
+    if (w.spatial && end > begin) {
+      for (size_t s = 0; s < count; ++s) sum[s] = 0.0;
+      for (uint32_t j = begin; j < end; ++j) {
+        const double* c = &w.change[size_t(earlier[j]) * count];
+        for (size_t s = 0; s < count; ++s) sum[s] += c[s];
+      }
+      const double inverse_n = 1.0 / double(end - begin);
+      for (size_t s = 0; s < count; ++s) r[s] += sum[s] * inverse_n;
+    }
+    quantize_lanes(count, w.weight[position], p, target, r, w.q, w.inverse_q, last, &w.current[at], &w.change[at],
+                   &w.current_symbol[at], w.distortion);
+    for (size_t s = 0; s < count; ++s) {
+      const int32_t before = w.previous_symbol[at + s], magnitude = before < 0 ? -before : before;
+      w.entropy[s].add(std::min(magnitude, 2), w.current_symbol[at + s]);
+    }
+  }
+}
+
+// walk_frame at w.lanes, unrolled for the lane counts the rate control measures (up to 16), compiled for the baseline
+// instructions and for AVX2 (the same operations on each lane, in the same order: the same doubles; -ffp-contract=off
+// keeps multiplies and adds apart, and no FMA is enabled).
+__attribute__((always_inline)) inline void walk_frame_at(const FrameWalk& w) {
+  switch (w.lanes) {
+    case 1: return walk_frame<1>(w);
+    case 2: return walk_frame<2>(w);
+    case 3: return walk_frame<3>(w);
+    case 4: return walk_frame<4>(w);
+    case 5: return walk_frame<5>(w);
+    case 6: return walk_frame<6>(w);
+    case 7: return walk_frame<7>(w);
+    case 8: return walk_frame<8>(w);
+    case 9: return walk_frame<9>(w);
+    case 10: return walk_frame<10>(w);
+    case 11: return walk_frame<11>(w);
+    case 12: return walk_frame<12>(w);
+    case 13: return walk_frame<13>(w);
+    case 14: return walk_frame<14>(w);
+    case 15: return walk_frame<15>(w);
+    case 16: return walk_frame<16>(w);
+    default: return walk_frame<0>(w);
+  }
+}
+
+void walk_frame_baseline(const FrameWalk& w) { walk_frame_at(w); }
+
+#if defined(__x86_64__) || defined(__i386__)
+__attribute__((target("avx2"))) void walk_frame_avx2(const FrameWalk& w) { walk_frame_at(w); }
+#endif
+
+// AVX2 where the processor has it, unless not allowed (tests compare the two).
+using WalkFrame = void (*)(const FrameWalk&);
+WalkFrame frame_walker(bool allow_avx2) {
+#if defined(__x86_64__) || defined(__i386__)
+  if (allow_avx2 && __builtin_cpu_supports("avx2")) return walk_frame_avx2;
+#endif
+  (void)allow_avx2;
+  return walk_frame_baseline;
+}
+
 // The subbands and steps are measured together, in one walk over the frames: every array below holds, per
 // welded vertex, one value per lane (an axis and a candidate step) side by side (position i, lane s at
 // i · S + s). The lanes' loops are independent, so the processor overlaps them instead of waiting on one
@@ -77,7 +179,7 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
                    const FramePredictions& predictions, const std::vector<float>& targets,
                    const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
                    SubbandCurve (&curves)[3], const std::function<void(double)>& progress,
-                   std::vector<std::vector<double>>& spare) {
+                   std::vector<std::vector<double>>& spare, WalkFrame walk_one) {
   const size_t welded = multiplicity.size();
   const bool temporal = content.flags & format::kFlagTemporalResiduals;
   const bool spatial = content.flags & format::kFlagSpatialResiduals;
@@ -91,7 +193,7 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
     }
   const size_t count = q.size();
   if (count == 0) return;
-  std::vector<double> distortion(count, 0.0), sum(count), r(count), zeros(count, 0.0), p(count), target(count);
+  std::vector<double> distortion(count, 0.0), zeros(count, 0.0);
   std::vector<double> change(welded * count, 0.0);
   std::vector<int32_t> previous_symbol(welded * count), current_symbol(welded * count);
   std::vector<EntropyCounter> entropy(count);
@@ -109,6 +211,11 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
       if (back > 0) last_use[first + f - back] = std::max(last_use[first + f - back], first + f);
     }
   std::vector<std::pair<size_t, std::vector<double>>> held;  // (frame, its lanes' residuals)
+  FrameWalk walk;
+  walk.traversal = &traversal, walk.welded = welded, walk.lanes = count, walk.spatial = spatial;
+  walk.lane_axis = lane_axis.data(), walk.q = q.data(), walk.inverse_q = inverse_q.data();
+  walk.weight = frame_weight.data(), walk.change = change.data(), walk.distortion = distortion.data();
+  walk.entropy = entropy.data();
   size_t frame = 0;
   for (uint32_t frames : content.clip_frames) {
     std::fill(previous_symbol.begin(), previous_symbol.end(), 0);
@@ -128,31 +235,12 @@ void measure_lanes(const StreamContent& content, const ResidualTraversal& traver
       std::vector<double> current;
       if (!spare.empty()) current = std::move(spare.back()), spare.pop_back();
       current.resize(welded * count);
-      for (size_t position = 0; position < welded; ++position) {
-        const uint32_t begin = traversal.earlier_offset[position], end = traversal.earlier_offset[position + 1];
-        const size_t at = position * count;
-        for (size_t s = 0; s < count; ++s) {
-          p[s] = frame_prediction[position * 3 + lane_axis[s]];
-          target[s] = frame_target[position * 3 + lane_axis[s]];
-        }
-        const double* last = temporal && reference ? &reference[at] : zeros.data();
-        for (size_t s = 0; s < count; ++s) r[s] = last[s];
-        if (spatial && end > begin) {
-          std::fill(sum.begin(), sum.end(), 0.0);
-          for (uint32_t j = begin; j < end; ++j) {
-            const double* c = &change[size_t(traversal.earlier[j]) * count];
-            for (size_t s = 0; s < count; ++s) sum[s] += c[s];
-          }
-          const double inverse_n = 1.0 / double(end - begin);
-          for (size_t s = 0; s < count; ++s) r[s] += sum[s] * inverse_n;
-        }
-        quantize_lanes(count, frame_weight[position], p.data(), target.data(), r.data(), q.data(), inverse_q.data(),
-                       last, &current[at], &change[at], &current_symbol[at], distortion.data());
-        for (size_t s = 0; s < count; ++s) {
-          const int32_t before = previous_symbol[at + s], magnitude = before < 0 ? -before : before;
-          entropy[s].add(std::min(magnitude, 2), current_symbol[at + s]);
-        }
-      }
+      walk.prediction = frame_prediction.data(), walk.target = frame_target.data();
+      walk.zero_reference = !(temporal && reference);
+      walk.reference = walk.zero_reference ? zeros.data() : reference;
+      walk.current = current.data();
+      walk.previous_symbol = previous_symbol.data(), walk.current_symbol = current_symbol.data();
+      walk_one(walk);
       // Let go of the frames nothing after this one uses; hold this one if something does.
       for (size_t i = 0; i < held.size();)
         if (last_use[held[i].first] <= frame) {
@@ -186,7 +274,8 @@ void measure_subbands(const StreamContent& content, const ResidualTraversal& tra
                       const FramePredictions& predictions, const std::vector<float>& targets,
                       const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
                       SubbandCurve (&curves)[3], size_t threads, const std::function<void(double)>& progress,
-                      MeasureBuffers* buffers) {
+                      MeasureBuffers* buffers, bool allow_avx2) {
+  const WalkFrame walk_one = frame_walker(allow_avx2);
   const size_t lanes = steps[0].size() + steps[1].size() + steps[2].size();
   // Each range predicts and walks every frame: at least two lanes a thread make that worth it.
   const size_t ranges = std::min(thread_count(threads), std::max<size_t>(lanes / 2, 1));
@@ -211,7 +300,7 @@ void measure_subbands(const StreamContent& content, const ResidualTraversal& tra
         }
       // The first range runs on the calling thread: it reports.
       measure_lanes(content, traversal, predictions, targets, multiplicity, subset, measured[r].axis,
-                    r == 0 ? progress : std::function<void(double)>(), reused.spare[r]);
+                    r == 0 ? progress : std::function<void(double)>(), reused.spare[r], walk_one);
     }
   });
   for (size_t r = 0; r < ranges; ++r)

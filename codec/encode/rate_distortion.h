@@ -50,12 +50,14 @@ struct MeasureBuffers {
 // flags and clips. targets: F × W × 3; multiplicity: W (original vertices per welded vertex). The steps are measured
 // on up to `threads` threads (0: every hardware thread), with the same results for any number. `progress`, if any,
 // is called on the calling thread with the fraction of the frames walked, after each frame. `buffers`, if any, is
-// reused.
+// reused. The walk uses AVX2 on x86 processors that have it, unless `allow_avx2` is false (for tests): the same
+// curves either way.
 void measure_subbands(const StreamContent& content, const ResidualTraversal& traversal,
                       const FramePredictions& predictions, const std::vector<float>& targets,
                       const std::vector<uint32_t>& multiplicity, const std::vector<double> (&steps)[3],
                       SubbandCurve (&curves)[3], size_t threads = 1,
-                      const std::function<void(double fraction)>& progress = {}, MeasureBuffers* buffers = nullptr);
+                      const std::function<void(double fraction)>& progress = {}, MeasureBuffers* buffers = nullptr,
+                      bool allow_avx2 = true);
 
 struct StepChoice {
   size_t index[3] = {0, 0, 0};  // into each curve
