@@ -125,7 +125,7 @@ TEST(Codec, ProgressNamesEachStageOnTheCallingThread) {
   for (const char* stage : {"segmentation: heat diffusion", "segmentation: eigenpairs: factorizing",
                             "segmentation: eigenpairs: Lanczos iteration", "segmentation: feature points",
                             "segmentation: Morse levels", "cluster count: trying ",
-                            "motion refinement", "motion fit", "rate control: quantizing",
+                            "motion refinement", "rate control: quantizing",
                             "rate control: measuring ", "coding the residuals", "writing the stream"})
     EXPECT_TRUE(seen(stage)) << stage;
   // Within a run of one stage the fraction only grows, to 1 for the passes over the frames (a pass starts at 0, and

@@ -125,8 +125,21 @@ TEST(Refinement, MotionRefinementMovesMislabelledVerticesHome) {
     }
   const float* base = frames.frame(0);
   const double before = motion_compensation_error(base, frames, initial, fit_affine_motion(base, frames, initial));
-  const Clusters refined = refine_by_motion(initial, base, frames, adjacency, 20);
-  const double after = motion_compensation_error(base, frames, refined, fit_affine_motion(base, frames, refined));
+  int iterations = 0;
+  AffineMotion motion;
+  const Clusters refined = refine_by_motion(initial, base, frames, adjacency, 20, &iterations, 1, &motion);
+  const AffineMotion fitted = fit_affine_motion(base, frames, refined);
+  const double after = motion_compensation_error(base, frames, refined, fitted);
+  // The motion it hands back is the fit of the clusters it returns, bit for bit: after the round that moved nothing,
+  // and when the rounds run out while vertices still move (then a fit of its own).
+  EXPECT_EQ(motion.transforms, fitted.transforms);
+  EXPECT_EQ(motion.centroid, fitted.centroid);
+  ASSERT_GE(iterations, 2);
+  AffineMotion cut_short;
+  const Clusters moving = refine_by_motion(initial, base, frames, adjacency, 1, nullptr, 1, &cut_short);
+  EXPECT_NE(moving.label, initial.label);
+  EXPECT_EQ(cut_short.transforms, fit_affine_motion(base, frames, moving).transforms);
+  EXPECT_NE(cut_short.transforms, fit_affine_motion(base, frames, initial).transforms);
   EXPECT_GT(before, 1e-4);
   EXPECT_LT(after, 1e-10);
   ASSERT_EQ(refined.count, 2u);

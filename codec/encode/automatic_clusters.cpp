@@ -75,14 +75,14 @@ class CandidateCost {
   double operator()(const Clusters& merged, uint8_t flags, size_t threads, bool report) const {
     const EncodeProblem& p = problem_;
     if (report) report_progress(p.settings, "cluster count: trying " + std::to_string(merged.count) + " clusters");
+    AffineMotion motion;
     const Clusters candidate = refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency,
-                                                kSampleRefinements, nullptr, threads);
+                                                kSampleRefinements, nullptr, threads, &motion);
     StreamContent trial = content_;
     trial.flags = flags;
     trial.clip_frames = sample_.clip_frames;
     trial.cluster_count = uint32_t(candidate.count);
     trial.labels = candidate.label;
-    const AffineMotion motion = fit_affine_motion(p.base_welded.data(), sample_.frames, candidate, threads);
     const double motion_step = kMotionStepRatio * p.mean_step;
     quantize_motion_and_weights(motion, motion_step / cluster_radius(p.base_welded, motion.centroid, candidate.label),
                                 motion_step, p.base_welded, sample_.frames, candidate, p.adjacency,

@@ -241,14 +241,15 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   Clusters clusters = choose_clusters(problem, segmentations, content, &chosen);
   // The refined clusters are the last segmentation, when there is one.
   report.curvature_refined = report.curvature_refined && chosen + 1 == segmentations.size();
+  AffineMotion fitted;
   if (settings.motion_refinement) {
     report_progress(settings, "motion refinement");
     clusters = refine_by_motion(clusters, problem.base_welded.data(), problem.trajectories, problem.adjacency, 8,
-                                &report.motion_refinement_iterations, settings.threads);
+                                &report.motion_refinement_iterations, settings.threads, &fitted);
+  } else {
+    report_progress(settings, "motion fit");
+    fitted = fit_affine_motion(problem.base_welded.data(), problem.trajectories, clusters, settings.threads);
   }
-  report_progress(settings, "motion fit");
-  const AffineMotion fitted =
-      fit_affine_motion(problem.base_welded.data(), problem.trajectories, clusters, settings.threads);
   report.e_pi = motion_compensation_error(problem.base_welded.data(), problem.trajectories, clusters, fitted);
   report.clusters = clusters.count;
   content.cluster_count = uint32_t(clusters.count);

@@ -59,22 +59,32 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
   // rounding, kept so that B does not depend on where the frame sits).
   std::vector<Eigen::Vector3d> centred_sum(cluster_count, Eigen::Vector3d::Zero());
   for (size_t v = 0; v < vertex_count; ++v) centred_sum[clusters.label[v]] += centred[v];
+  // Each cluster's vertices in ascending order (member_offset[k] to member_offset[k + 1] of `members`): a cluster's
+  // sums are taken in registers, in the order a pass over every vertex would add them.
+  std::vector<uint32_t> member_offset(cluster_count + 1, 0), members(vertex_count);
+  for (size_t v = 0; v < vertex_count; ++v) ++member_offset[clusters.label[v] + 1];
+  for (size_t k = 0; k < cluster_count; ++k) member_offset[k + 1] += member_offset[k];
+  {
+    std::vector<uint32_t> next(member_offset.begin(), member_offset.end() - 1);
+    for (size_t v = 0; v < vertex_count; ++v) members[next[clusters.label[v]]++] = uint32_t(v);
+  }
   // Each frame's fit is its own: the frames are split over threads.
   parallel_ranges(frames.frame_count, thread_count(threads), [&](size_t begin, size_t end) {
     std::vector<Eigen::Matrix3d> moments(cluster_count);
     std::vector<Eigen::Vector3d> mean(cluster_count);
     for (size_t f = begin; f < end; ++f) {
       const float* frame = frames.frame(f);
-      for (size_t k = 0; k < cluster_count; ++k) moments[k].setZero(), mean[k].setZero();
-      for (size_t v = 0; v < vertex_count; ++v) {
-        const uint32_t k = clusters.label[v];
-        const Eigen::Vector3d y(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]);
-        mean[k] += y;
-        moments[k] += y * centred[v].transpose();
-      }
       for (size_t k = 0; k < cluster_count; ++k) {
-        mean[k] /= double(std::max<size_t>(size[k], 1));
-        moments[k] -= mean[k] * centred_sum[k].transpose();
+        Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (uint32_t i = member_offset[k]; i < member_offset[k + 1]; ++i) {
+          const size_t v = members[i];
+          const Eigen::Vector3d y(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]);
+          sum += y;
+          moment += y * centred[v].transpose();
+        }
+        mean[k] = sum / double(std::max<size_t>(size[k], 1));
+        moments[k] = moment - mean[k] * centred_sum[k].transpose();
       }
       for (size_t k = 0; k < cluster_count; ++k) {
         Eigen::JacobiSVD<Eigen::Matrix3d> svd(moments[k], Eigen::ComputeFullU | Eigen::ComputeFullV);

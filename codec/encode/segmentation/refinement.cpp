@@ -263,12 +263,16 @@ MorseBands refine_levels(const std::vector<double>& positions, const std::vector
 }
 
 Clusters refine_by_motion(const Clusters& clusters, const float* base, const Trajectories& frames,
-                          const VertexAdjacency& adjacency, int max_iterations, int* iterations_out, size_t threads) {
+                          const VertexAdjacency& adjacency, int max_iterations, int* iterations_out, size_t threads,
+                          AffineMotion* motion_out) {
   Clusters refined = clusters;
   const size_t vertex_count = frames.vertex_count;
   int iterations = 0;
+  AffineMotion motion;
+  std::vector<uint32_t> fitted;  // the labels `motion` is the fit of
   for (; iterations < max_iterations; ++iterations) {
-    const AffineMotion motion = fit_affine_motion(base, frames, refined, threads);
+    motion = fit_affine_motion(base, frames, refined, threads);
+    fitted = refined.label;
     std::vector<uint32_t> label = refined.label;
     // Each vertex's move depends on the previous labels only: the vertices are split over threads.
     parallel_ranges(vertex_count, thread_count(threads), [&](size_t begin, size_t end) {
@@ -310,6 +314,10 @@ Clusters refine_by_motion(const Clusters& clusters, const float* base, const Tra
     if (!moved) break;
   }
   if (iterations_out) *iterations_out = iterations;
+  if (motion_out)
+    *motion_out = refined.label == fitted && motion.cluster_count == refined.count
+                      ? std::move(motion)
+                      : fit_affine_motion(base, frames, refined, threads);
   return refined;
 }
 

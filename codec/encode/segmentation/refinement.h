@@ -47,8 +47,10 @@ MorseBands refine_levels(const std::vector<double>& positions, const std::vector
 // Motion-driven refinement: at most `max_iterations` rounds of moving each boundary vertex to the adjacent
 // cluster whose transforms predict it best (refitting the transforms after each round).
 // The vertices are weighed on up to `threads` threads (0: every hardware thread), with the same result for any number.
+// `motion`, if any, receives fit_affine_motion of the clusters returned: the last round's fit when that round moved
+// nothing, else a fit of its own.
 Clusters refine_by_motion(const Clusters& clusters, const float* base, const Trajectories& frames,
                           const VertexAdjacency& adjacency, int max_iterations, int* iterations = nullptr,
-                          size_t threads = 1);
+                          size_t threads = 1, AffineMotion* motion = nullptr);
 
 }  // namespace segmorph
