@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "common/parallel.h"
@@ -62,24 +63,30 @@ Sample sample_frames(const EncodeProblem& problem) {
 // The cost of a candidate segmentation, smaller is better: with an error target, the estimated stream bits at the
 // target distortion; with a rate target, the estimated log distortion at the target size. It is measured on a sample
 // of the frames so that the search costs about a quarter of one full pass: the clusters refined by motion
-// (kSampleRefinements iterations), motion quantized at the expected step, weights fitted, then the closed-loop
-// residual rate and distortion at two residual steps (the expected one and twice it, on every axis), interpolated in
-// log distortion.
+// (kSampleRefinements iterations), motion quantized at the expected step, weights fitted (prepare: what the residual
+// predictions do not change), then the closed-loop residual rate and distortion at two residual steps (the expected
+// one and twice it, on every axis), interpolated in log distortion (cost: for the residual predictions `flags` allow).
 class CandidateCost {
  public:
   CandidateCost(const EncodeProblem& problem, const StreamContent& content)
       : problem_(problem), content_(content), sample_(sample_frames(problem)) {}
 
+  struct Prepared {
+    StreamContent trial;  // its motion and weights quantized; its flags set by cost()
+    std::unique_ptr<FramePredictions> predictions;
+  };
+
   // On `threads` threads (the same estimate for every count); `report`: whether to report progress (one caller at
   // a time may).
-  double operator()(const Clusters& merged, uint8_t flags, size_t threads, bool report) const {
+  std::shared_ptr<Prepared> prepare(const Clusters& merged, size_t threads, bool report) const {
     const EncodeProblem& p = problem_;
     if (report) report_progress(p.settings, "cluster count: trying " + std::to_string(merged.count) + " clusters");
     AffineMotion motion;
     const Clusters candidate = refine_by_motion(merged, p.base_welded.data(), sample_.frames, p.adjacency,
                                                 kSampleRefinements, nullptr, threads, &motion);
-    StreamContent trial = content_;
-    trial.flags = flags;
+    auto prepared = std::make_shared<Prepared>();
+    StreamContent& trial = prepared->trial;
+    trial = content_;
     trial.clip_frames = sample_.clip_frames;
     trial.cluster_count = uint32_t(candidate.count);
     trial.labels = candidate.label;
@@ -87,10 +94,17 @@ class CandidateCost {
     quantize_motion_and_weights(motion, motion_step / cluster_radius(p.base_welded, motion.centroid, candidate.label),
                                 motion_step, p.base_welded, sample_.frames, candidate, p.adjacency,
                                 p.settings.blend_weights, trial);
-    const FramePredictions trial_predictions(trial, p.base_welded);
+    prepared->predictions = std::make_unique<FramePredictions>(trial, p.base_welded);
+    return prepared;
+  }
+
+  double cost(Prepared& prepared, uint8_t flags, size_t threads) const {
+    const EncodeProblem& p = problem_;
+    StreamContent& trial = prepared.trial;
+    trial.flags = flags;
     const std::vector<double> steps = {p.mean_step, 2 * p.mean_step};
     SubbandCurve measured[3];
-    measure_subbands(trial, p.traversal, trial_predictions, sample_.frames.positions, p.multiplicity,
+    measure_subbands(trial, p.traversal, *prepared.predictions, sample_.frames.positions, p.multiplicity,
                      {steps, steps, steps}, measured, threads);
     std::vector<uint8_t> side;
     write_stream(trial, p.base, side);
@@ -123,15 +137,24 @@ class CandidateCost {
 struct Tried {
   Clusters clusters;
   double cost = 0;
+  std::shared_ptr<CandidateCost::Prepared> prepared;  // for the costs of other residual predictions
 };
+Tried try_count(const CandidateCost& cost_of, Clusters merged, uint8_t flags, size_t threads, bool report) {
+  Tried tried;
+  tried.clusters = std::move(merged);
+  tried.prepared = cost_of.prepare(tried.clusters, threads, report);
+  tried.cost = cost_of.cost(*tried.prepared, flags, threads);
+  return tried;
+}
 std::vector<Tried> try_counts(const EncodeProblem& problem, const Clusters& morse, const CandidateCost& cost_of,
                               const std::vector<size_t>& counts, uint8_t flags, size_t threads, bool report) {
   std::vector<Tried> tried(counts.size());
   const size_t each = std::max<size_t>(1, threads / std::max<size_t>(counts.size(), 1));
   parallel_items(counts.size(), threads, [&](size_t i) {
-    tried[i].clusters =
-        merge_clusters(morse, counts[i], problem.base_welded.data(), problem.trajectories, problem.adjacency);
-    tried[i].cost = cost_of(tried[i].clusters, flags, each, report && i == 0);
+    tried[i] = try_count(cost_of,
+                         merge_clusters(morse, counts[i], problem.base_welded.data(), problem.trajectories,
+                                        problem.adjacency),
+                         flags, each, report && i == 0);
   });
   return tried;
 }
@@ -139,11 +162,11 @@ std::vector<Tried> try_counts(const EncodeProblem& problem, const Clusters& mors
 // Automatic K: more clusters cost motion side information and save residual bits. Candidates from the
 // segmentation's own count down by factors of 2/3, each merged from the segmentation; the search stops at the first
 // candidate that costs more than the one before. Then the geometric means of the best and its tried neighbours: the
-// cost is not smooth in K, and a step of 2/3 missed K worth 7 % (Fox, 6 for 9). `best_cost` receives the chosen K's
-// cost. With several threads the search tries up to kCandidatesAtOnce counts at once, ahead of the one that stops it
+// cost is not smooth in K, and a step of 2/3 missed K worth 7 % (Fox, 6 for 9). Returns the chosen candidate with its
+// cost and what that was measured on. With several threads the search tries up to kCandidatesAtOnce counts at once, ahead of the one that stops it
 // (what it chooses does not change: the costs are taken in order, those past the stop left unused).
-Clusters automatic_count(const EncodeProblem& problem, const Clusters& morse, const CandidateCost& cost_of,
-                         uint8_t flags, size_t threads, bool report, double& best_cost) {
+Tried automatic_count(const EncodeProblem& problem, const Clusters& morse, const CandidateCost& cost_of,
+                      uint8_t flags, size_t threads, bool report) {
   const size_t largest =
       std::max<size_t>(1, std::min({morse.count, problem.welded / kVerticesPerCluster, kMaxClusters}));
   std::vector<size_t> counts = {largest};  // the counts the search goes down through
@@ -158,19 +181,18 @@ Clusters automatic_count(const EncodeProblem& problem, const Clusters& morse, co
     }
     return tried[i];
   };
-  Clusters best = std::move(cost_at(0).clusters);
-  best_cost = tried[0].cost;
+  Tried best = std::move(cost_at(0));
   size_t above = 0, below = 0;  // the tried counts next to the best one, 0 for none
-  for (size_t i = 1, previous = best.count; i < counts.size(); ++i) {
+  for (size_t i = 1, previous = best.clusters.count; i < counts.size(); ++i) {
     Tried& candidate = cost_at(i);
-    if (!(candidate.cost < best_cost)) {
+    if (!(candidate.cost < best.cost)) {
       below = candidate.clusters.count;
       break;
     }
     above = previous, previous = candidate.clusters.count;
-    best = std::move(candidate.clusters), best_cost = candidate.cost;
+    best = std::move(candidate);
   }
-  const size_t chosen = best.count;
+  const size_t chosen = best.clusters.count;
   std::vector<size_t> between;  // the geometric means tried, in the order of {above, below}
   for (size_t neighbour : {above, below}) {
     const size_t k = size_t(std::lround(std::sqrt(double(neighbour) * double(chosen))));
@@ -178,7 +200,7 @@ Clusters automatic_count(const EncodeProblem& problem, const Clusters& morse, co
     between.push_back(k);
   }
   for (Tried& candidate : try_counts(problem, morse, cost_of, between, flags, threads, report))
-    if (candidate.cost < best_cost) best = std::move(candidate.clusters), best_cost = candidate.cost;
+    if (candidate.cost < best.cost) best = std::move(candidate);
   return best;
 }
 
@@ -198,37 +220,33 @@ Clusters choose_clusters(const EncodeProblem& problem, const std::vector<Cluster
   // out among them; each estimate is the same for every thread count), the first one reporting progress.
   const size_t count = segmentations.size(), threads = thread_count(settings.threads);
   const size_t each = std::max<size_t>(1, threads / count);
-  std::vector<Clusters> candidates(count);
-  std::vector<double> costs(count);
+  std::vector<Tried> candidates(count);
   parallel_items(count, threads, [&](size_t item) {
     const size_t s = count - 1 - item;  // the last (refined) one first
-    if (settings.clusters) {
-      candidates[s] = merged(segmentations[s], settings.clusters);
-      costs[s] = cost_of(candidates[s], content.flags, each, item == 0);
-    } else {
-      candidates[s] = automatic_count(problem, segmentations[s], cost_of, content.flags, each, item == 0, costs[s]);
-    }
+    candidates[s] = settings.clusters
+                        ? try_count(cost_of, merged(segmentations[s], settings.clusters), content.flags, each, item == 0)
+                        : automatic_count(problem, segmentations[s], cost_of, content.flags, each, item == 0);
   });
   // The last (refined) segmentation first: an earlier one replaces it only when estimated strictly cheaper (a tie, or
   // a cost that is not a number on a mesh of a few vertices, keeps the refined one).
-  double best_cost = 0;
-  Clusters clusters;
+  Tried best;
   for (size_t s = count; s-- > 0;)
-    if (s + 1 == count || costs[s] < best_cost) {
-      best_cost = costs[s], clusters = std::move(candidates[s]);
+    if (s + 1 == count || candidates[s].cost < best.cost) {
+      best = std::move(candidates[s]);
       if (chosen) *chosen = s;
     }
   // Temporal and spatial residual prediction (when allowed) are kept when the estimate says they pay: temporal does
   // for slow sequences, not always for fast ones; spatial does at higher rates, not always at low ones, where most
   // residuals quantize to zero (docs/codec.md). The estimate is biased a little against temporal prediction (each
   // sample window starts without a previous frame).
+  // Measured on the chosen candidate as prepared (its refinement and motion do not depend on them).
   for (uint8_t prediction : {format::kFlagTemporalResiduals, format::kFlagSpatialResiduals}) {
     if (!(content.flags & prediction)) continue;
     const uint8_t without = uint8_t(content.flags & ~prediction);
-    const double cost = cost_of(clusters, without, threads, true);
-    if (cost < best_cost) content.flags = without, best_cost = cost;
+    const double cost = cost_of.cost(*best.prepared, without, threads);
+    if (cost < best.cost) content.flags = without, best.cost = cost;
   }
-  return clusters;
+  return std::move(best.clusters);
 }
 
 }  // namespace segmorph
