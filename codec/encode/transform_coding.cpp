@@ -229,21 +229,50 @@ struct Choice {
 // cluster may use: on up to `threads` threads, the first of the fewest bits chosen, as in order).
 Choice choose(const std::vector<std::vector<Option>>& options, double budget, const std::vector<size_t>& sizes,
               double bits_per_vector, size_t threads) {
-  // The choice at lambda of clusters using at most `most` of the stream's vectors; the options chosen only when
+  // Each cluster's options as the searches read them: first those any size allows (none, its own basis's), then
+  // those in the stream's basis by basis size (stable), so that the options a size allows are a prefix; each with
+  // its place in the list, which breaks ties (the first in the list of the least bits + lambda × error is chosen).
+  struct Listed {
+    std::vector<double> bits, error;
+    std::vector<uint32_t> place;
+    std::vector<size_t> allowed;  // per size: how many of the options it allows
+  };
+  std::vector<Listed> listed(options.size());
+  for (size_t k = 0; k < options.size(); ++k) {
+    const std::vector<Option>& list = options[k];
+    std::vector<uint32_t> order(list.size());
+    for (uint32_t i = 0; i < list.size(); ++i) order[i] = i;
+    auto in_stream = [&](uint32_t i) { return list[i].source == format::kBasisStream; };
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      if (in_stream(a) != in_stream(b)) return !in_stream(a);
+      return in_stream(a) && list[a].m < list[b].m;
+    });
+    Listed& l = listed[k];
+    for (uint32_t i : order) l.bits.push_back(list[i].bits), l.error.push_back(list[i].error), l.place.push_back(i);
+    for (size_t most : sizes) {
+      size_t count = 0;
+      for (uint32_t i : order) count += !(in_stream(i) && list[i].m > most);
+      l.allowed.push_back(count);
+    }
+  }
+  // The choice at lambda of clusters using at most sizes[j] of the stream's vectors; the options chosen only when
   // `keep` (the bisection needs the sums alone).
-  auto pick = [&](double lambda, size_t most, bool keep) {
+  auto pick = [&](double lambda, size_t j, bool keep) {
     Choice c;
     c.bits = 0;
     if (keep) c.per_cluster.reserve(options.size());
-    for (const std::vector<Option>& list : options) {
-      const Option* chosen = &list[0];
-      for (const Option& o : list)
-        if (!(o.source == format::kBasisStream && o.m > most) &&
-            o.bits + lambda * o.error < chosen->bits + lambda * chosen->error)
-          chosen = &o;
-      if (keep) c.per_cluster.push_back(*chosen);
-      c.bits += chosen->bits, c.error += chosen->error;
-      if (chosen->source == format::kBasisStream) c.stream_vectors = std::max(c.stream_vectors, chosen->m);
+    for (size_t k = 0; k < options.size(); ++k) {
+      const Listed& l = listed[k];
+      size_t chosen = 0;  // the none option, first in the list
+      double least = l.bits[0] + lambda * l.error[0];
+      for (size_t i = 1; i < l.allowed[j]; ++i) {
+        const double value = l.bits[i] + lambda * l.error[i];
+        if (value < least || (value == least && l.place[i] < l.place[chosen])) least = value, chosen = i;
+      }
+      const Option& o = options[k][l.place[chosen]];
+      if (keep) c.per_cluster.push_back(o);
+      c.bits += o.bits, c.error += o.error;
+      if (o.source == format::kBasisStream) c.stream_vectors = std::max(c.stream_vectors, o.m);
     }
     c.bits += double(c.stream_vectors) * bits_per_vector;
     c.lambda = lambda;
@@ -252,12 +281,12 @@ Choice choose(const std::vector<std::vector<Option>>& options, double budget, co
   std::vector<Choice> per_size(sizes.size());  // bits infinite where no lambda meets the budget
   parallel_items(sizes.size(), threads, [&](size_t j) {
     double low = 1e-12, high = 1e12;
-    if (pick(high, sizes[j], false).error > budget) return;
+    if (pick(high, j, false).error > budget) return;
     for (int i = 0; i < 80 && high > low * (1 + 1e-6); ++i) {
       const double middle = std::sqrt(low * high);
-      (pick(middle, sizes[j], false).error > budget ? low : high) = middle;
+      (pick(middle, j, false).error > budget ? low : high) = middle;
     }
-    per_size[j] = pick(high, sizes[j], true);
+    per_size[j] = pick(high, j, true);
   });
   Choice best;
   for (Choice& c : per_size)
