@@ -75,15 +75,20 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
     for (size_t f = begin; f < end; ++f) {
       const float* frame = frames.frame(f);
       for (size_t k = 0; k < cluster_count; ++k) {
-        Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        // Σ y and Σ y xᵀ in scalars, which stay in registers (an Eigen matrix here did not).
+        double s0 = 0, s1 = 0, s2 = 0, m00 = 0, m01 = 0, m02 = 0, m10 = 0, m11 = 0, m12 = 0, m20 = 0, m21 = 0, m22 = 0;
         for (uint32_t i = member_offset[k]; i < member_offset[k + 1]; ++i) {
           const size_t v = members[i];
-          const Eigen::Vector3d y(frame[v * 3], frame[v * 3 + 1], frame[v * 3 + 2]);
-          sum += y;
-          moment += y * centred[v].transpose();
+          const double y0 = frame[v * 3], y1 = frame[v * 3 + 1], y2 = frame[v * 3 + 2];
+          const double x0 = centred[v](0), x1 = centred[v](1), x2 = centred[v](2);
+          s0 += y0, s1 += y1, s2 += y2;
+          m00 += y0 * x0, m01 += y0 * x1, m02 += y0 * x2;
+          m10 += y1 * x0, m11 += y1 * x1, m12 += y1 * x2;
+          m20 += y2 * x0, m21 += y2 * x1, m22 += y2 * x2;
         }
-        mean[k] = sum / double(std::max<size_t>(size[k], 1));
+        Eigen::Matrix3d moment;
+        moment << m00, m01, m02, m10, m11, m12, m20, m21, m22;
+        mean[k] = Eigen::Vector3d(s0, s1, s2) / double(std::max<size_t>(size[k], 1));
         moments[k] = moment - mean[k] * centred_sum[k].transpose();
       }
       for (size_t k = 0; k < cluster_count; ++k) {
