@@ -113,17 +113,39 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
     }
     return sum;
   };
-  // The coarse score: the squared difference alone, on every coarse_stride-th sampled position.
-  auto coarse_score = [&](const double* now, const double* then) {
-    double sum = 0;
-    for (size_t s = 0; s < sampled.size(); s += coarse_stride) {
-      const size_t at = size_t(needed_index[sampled[s]]) * 3;
-      for (size_t a = 0; a < 3; ++a) {
-        const double e = then ? now[at + a] - then[at + a] : now[at + a];
+  // The coarse score: the squared difference alone, on every coarse_stride-th sampled position, summed in their order.
+  // Its values are gathered once a frame into a row of their own (coarse_values); a score from zeros reads a row of
+  // zeros (x − 0.0 is x). Four candidates are summed side by side, each its own sum in its own order: the same
+  // doubles, without each add waiting on the one before.
+  std::vector<size_t> coarse_at;  // into a residual row
+  for (size_t s = 0; s < sampled.size(); s += coarse_stride) coarse_at.push_back(size_t(needed_index[sampled[s]]) * 3);
+  const size_t coarse_values = coarse_at.size() * 3;
+  const std::vector<double> coarse_zeros(coarse_values, 0.0);
+  auto gather_coarse = [&](const double* row, double* out) {
+    for (size_t c = 0; c < coarse_at.size(); ++c)
+      for (size_t a = 0; a < 3; ++a) out[c * 3 + a] = row[coarse_at[c] + a];
+  };
+  // The coarse scores of `now` against each row of `then` into `scores`.
+  auto coarse_scores = [&](const double* now, const std::vector<const double*>& then, std::vector<double>& scores) {
+    scores.assign(then.size(), 0.0);
+    size_t j = 0;
+    for (; j + 4 <= then.size(); j += 4) {
+      const double *t0 = then[j], *t1 = then[j + 1], *t2 = then[j + 2], *t3 = then[j + 3];
+      double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+      for (size_t i = 0; i < coarse_values; ++i) {
+        const double e0 = now[i] - t0[i], e1 = now[i] - t1[i], e2 = now[i] - t2[i], e3 = now[i] - t3[i];
+        s0 += e0 * e0, s1 += e1 * e1, s2 += e2 * e2, s3 += e3 * e3;
+      }
+      scores[j] = s0, scores[j + 1] = s1, scores[j + 2] = s2, scores[j + 3] = s3;
+    }
+    for (; j < then.size(); ++j) {
+      double sum = 0;
+      for (size_t i = 0; i < coarse_values; ++i) {
+        const double e = now[i] - then[j][i];
         sum += e * e;
       }
+      scores[j] = sum;
     }
-    return sum;
   };
 
   // Each frame's choice depends only on the residuals of its window: the frames split into ranges of about equal
@@ -148,12 +170,19 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
   parallel_items(ranges, ranges, [&](size_t r) {
     const size_t begin = range_begin[r], end = range_begin[r + 1];
     if (begin == end) return;
-    std::vector<double> residuals(ring * needed.size() * 3);
+    std::vector<double> residuals(ring * needed.size() * 3), coarse_ring(ring * coarse_values);
     auto row = [&](size_t frame) { return &residuals[(frame % ring) * needed.size() * 3]; };
+    auto coarse_row = [&](size_t frame) { return &coarse_ring[(frame % ring) * coarse_values]; };
+    auto fill_both = [&](size_t frame) {
+      fill(row(frame), frame);
+      gather_coarse(row(frame), coarse_row(frame));
+    };
     const size_t reach = std::min(clip_index[begin], ring - 1);  // the earlier frames the first one's window reads
-    for (size_t frame = begin - reach; frame < begin; ++frame) fill(row(frame), frame);
+    for (size_t frame = begin - reach; frame < begin; ++frame) fill_both(frame);
+    std::vector<const double*> candidates;
+    std::vector<double> scores;
     for (size_t frame = begin; frame < end; ++frame) {
-      fill(row(frame), frame);  // every frame, the clip's first too: later frames may reference it
+      fill_both(frame);  // every frame, the clip's first too: later frames may reference it
       const size_t f = clip_index[frame];
       if (f == 0) continue;
       auto back_row = [&](size_t back) { return back > 0 ? row(frame - back) : nullptr; };
@@ -162,9 +191,14 @@ FrameReferences choose_frame_references(const StreamContent& content, const Resi
       std::vector<std::pair<double, size_t>> coarse;
       // Without temporal residuals (the cluster search measured that the previous frame does not pay), only the frames
       // further back are candidates.
+      candidates.clear();
       for (size_t back = 0; back <= window; ++back)
-        if (back != implied && (temporal || back != 1))
-          coarse.emplace_back(coarse_score(row(frame), back_row(back)), back);
+        if (back != implied && (temporal || back != 1)) {
+          coarse.emplace_back(0.0, back);
+          candidates.push_back(back > 0 ? coarse_row(frame - back) : coarse_zeros.data());
+        }
+      coarse_scores(coarse_row(frame), candidates, scores);
+      for (size_t i = 0; i < coarse.size(); ++i) coarse[i].first = scores[i];
       std::sort(coarse.begin(), coarse.end());
       const double implied_score = score(row(frame), back_row(implied));
       size_t best = implied;
