@@ -135,6 +135,7 @@ TEST(Refinement, MotionRefinementMovesMislabelledVerticesHome) {
   EXPECT_EQ(motion.transforms, fitted.transforms);
   EXPECT_EQ(motion.centroid, fitted.centroid);
   ASSERT_GE(iterations, 2);
+  ASSERT_LT(iterations, 20);  // it settled: the motion handed back is the last round's
   AffineMotion cut_short;
   const Clusters moving = refine_by_motion(initial, base, frames, adjacency, 1, nullptr, 1, &cut_short);
   EXPECT_NE(moving.label, initial.label);

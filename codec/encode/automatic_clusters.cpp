@@ -1,6 +1,7 @@
 #include "encode/automatic_clusters.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -192,6 +193,7 @@ Tried automatic_count(const EncodeProblem& problem, const Clusters& morse, const
     above = previous, previous = candidate.clusters.count;
     best = std::move(candidate);
   }
+  tried.clear();  // what the others were measured on (best has been moved out)
   const size_t chosen = best.clusters.count;
   std::vector<size_t> between;  // the geometric means tried, in the order of {above, below}
   for (size_t neighbour : {above, below}) {
@@ -212,6 +214,7 @@ Clusters choose_clusters(const EncodeProblem& problem, const std::vector<Cluster
   auto merged = [&](const Clusters& morse, size_t k) {
     return merge_clusters(morse, k, problem.base_welded.data(), problem.trajectories, problem.adjacency);
   };
+  assert(!segmentations.empty());
   if (chosen) *chosen = segmentations.size() - 1;
   if (settings.mode == RateMode::lossless)
     return merged(segmentations.back(), settings.clusters ? settings.clusters : kLosslessClusters);
@@ -235,6 +238,7 @@ Clusters choose_clusters(const EncodeProblem& problem, const std::vector<Cluster
       best = std::move(candidates[s]);
       if (chosen) *chosen = s;
     }
+  candidates.clear();
   // Temporal and spatial residual prediction (when allowed) are kept when the estimate says they pay: temporal does
   // for slow sequences, not always for fast ones; spatial does at higher rates, not always at low ones, where most
   // residuals quantize to zero (docs/codec.md). The estimate is biased a little against temporal prediction (each

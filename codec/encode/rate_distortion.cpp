@@ -155,14 +155,15 @@ __attribute__((always_inline)) inline void walk_frame_at(const FrameWalk& w) {
 
 void walk_frame_baseline(const FrameWalk& w) { walk_frame_at(w); }
 
-#if defined(__x86_64__) || defined(__i386__)
+#if defined(__x86_64__)
 __attribute__((target("avx2"))) void walk_frame_avx2(const FrameWalk& w) { walk_frame_at(w); }
 #endif
 
-// AVX2 where the processor has it, unless not allowed (tests compare the two).
+// AVX2 where the processor has it, unless not allowed (tests compare the two); x86-64 only (a 32-bit x86 build's
+// baseline could compute in x87's extended precision).
 using WalkFrame = void (*)(const FrameWalk&);
 WalkFrame frame_walker(bool allow_avx2) {
-#if defined(__x86_64__) || defined(__i386__)
+#if defined(__x86_64__)
   if (allow_avx2 && __builtin_cpu_supports("avx2")) return walk_frame_avx2;
 #endif
   (void)allow_avx2;

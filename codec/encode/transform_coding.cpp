@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <unordered_map>
 
@@ -240,6 +241,7 @@ Choice choose(const std::vector<std::vector<Option>>& options, double budget, co
   std::vector<Listed> listed(options.size());
   for (size_t k = 0; k < options.size(); ++k) {
     const std::vector<Option>& list = options[k];
+    assert(!list.empty() && list[0].source == format::kBasisNone);  // the searches start from it
     std::vector<uint32_t> order(list.size());
     for (uint32_t i = 0; i < list.size(); ++i) order[i] = i;
     auto in_stream = [&](uint32_t i) { return list[i].source == format::kBasisStream; };

@@ -269,10 +269,11 @@ Clusters refine_by_motion(const Clusters& clusters, const float* base, const Tra
   const size_t vertex_count = frames.vertex_count;
   int iterations = 0;
   AffineMotion motion;
+  bool have_fit = false;
   std::vector<uint32_t> fitted;  // the labels `motion` is the fit of
   for (; iterations < max_iterations; ++iterations) {
     motion = fit_affine_motion(base, frames, refined, threads);
-    fitted = refined.label;
+    fitted = refined.label, have_fit = true;
     std::vector<uint32_t> label = refined.label;
     // Each vertex's move depends on the previous labels only: the vertices are split over threads.
     parallel_ranges(vertex_count, thread_count(threads), [&](size_t begin, size_t end) {
@@ -315,7 +316,7 @@ Clusters refine_by_motion(const Clusters& clusters, const float* base, const Tra
   }
   if (iterations_out) *iterations_out = iterations;
   if (motion_out)
-    *motion_out = refined.label == fitted && motion.cluster_count == refined.count
+    *motion_out = have_fit && refined.label == fitted && motion.cluster_count == refined.count
                       ? std::move(motion)
                       : fit_affine_motion(base, frames, refined, threads);
   return refined;
