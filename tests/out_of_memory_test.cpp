@@ -1,7 +1,9 @@
 // The pipeline API promises errors as a Status, "never as an exception" (include/segmorph/segmorph.h): a failed
 // allocation anywhere in info, bake, encode, decode or verify comes back as OUT_OF_MEMORY, and the process lives on.
 // This test binary replaces the global operator new so that one chosen allocation fails (the nth from a point on),
-// and sweeps n over each call's allocations.
+// and sweeps n over each call's allocations. As the standard operator new does, a failed allocation first calls the
+// new_handler, if one is installed, and is tried again (gltf/json_reserve.h frees a reserve there while the JSON
+// library, which allocates in its destructors, runs); without one it throws std::bad_alloc.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -20,10 +22,17 @@ std::atomic<long long> allocations_counted{0};
 void* allocate(std::size_t size) {
   allocations_counted.fetch_add(1, std::memory_order_relaxed);
   if (allocations_until_failure.load(std::memory_order_relaxed) >= 0 &&
-      allocations_until_failure.fetch_sub(1, std::memory_order_relaxed) == 0)
-    throw std::bad_alloc();
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
+      allocations_until_failure.fetch_sub(1, std::memory_order_relaxed) == 0) {
+    const std::new_handler handler = std::get_new_handler();
+    if (!handler) throw std::bad_alloc();
+    handler();  // it made room (or threw): tried again below
+  }
+  for (;;) {
+    if (void* p = std::malloc(size ? size : 1)) return p;
+    const std::new_handler handler = std::get_new_handler();
+    if (!handler) throw std::bad_alloc();
+    handler();
+  }
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "accessor.h"
 #include "file_names.h"
 #include "gltf/glb.h"
+#include "gltf/json_reserve.h"
 #include "json_prepass.h"
 
 namespace segmorph {
@@ -123,13 +124,18 @@ Status load_gltf(const std::string& path, tinygltf::Model& model, std::vector<st
   std::string error, warning;
   const size_t slash = path.find_last_of('/');
   const std::string directory = slash == std::string::npos ? std::string() : path.substr(0, slash);
-  const bool loaded =
-      binary
-          ? loader.LoadBinaryFromMemory(&model, &error, &warning, reinterpret_cast<const unsigned char*>(bytes.data()),
-                                        unsigned(bytes.size()), directory)
-          : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), unsigned(bytes.size()), directory);
+  bool loaded, short_of_memory;
+  {
+    const JsonReserve reserve;  // for the JSON library's destructors (json_reserve.h)
+    loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
+                                                  reinterpret_cast<const unsigned char*>(bytes.data()),
+                                                  unsigned(bytes.size()), directory)
+                    : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), unsigned(bytes.size()),
+                                                 directory);
+    short_of_memory = reserve.used();
+  }
   // tinygltf catches a failed allocation of its JSON parser and says so in its message.
-  if (!loaded && error.find("bad_alloc") != std::string::npos)
+  if (short_of_memory || (!loaded && error.find("bad_alloc") != std::string::npos))
     return Status(StatusCode::out_of_memory, "out of memory while parsing the glTF JSON");
   if (!loaded) return Status(StatusCode::bad_data, "cannot parse glTF: " + one_line(error.empty() ? warning : error));
   if (warnings && !warning.empty()) warnings->push_back(one_line(warning));

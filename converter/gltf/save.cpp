@@ -10,6 +10,7 @@
 
 #include "file_names.h"
 #include "gltf/glb.h"
+#include "gltf/json_reserve.h"
 #include "gltf/output_file.h"
 #include "gltf/packing.h"
 #include "segmorph/version.h"
@@ -94,8 +95,8 @@ void name_empty_objects(tinygltf::Model& model) {
 // tinygltf writes it: for a .glb compact, with the buffer's byteLength only; for a .gltf (`bin_name` not empty) with
 // sorted keys, two spaces and a final newline, and the buffer the file `bin_name` beside it. The buffers' bytes stay
 // where they are: they are written from there, after the JSON.
-std::string packed_json(tinygltf::Model& model, const std::vector<tinygltf::BufferView>& packed,
-                        tinygltf::TinyGLTF& writer, const std::string& bin_name) {
+std::string packed_json_of(tinygltf::Model& model, const std::vector<tinygltf::BufferView>& packed,
+                           tinygltf::TinyGLTF& writer, const std::string& bin_name) {
   const size_t size = packed_size(packed);
   std::vector<tinygltf::Buffer> buffers;
   buffers.swap(model.buffers);
@@ -128,6 +129,18 @@ std::string packed_json(tinygltf::Model& model, const std::vector<tinygltf::Buff
   return json.dump(2) + "\n";
 }
 
+// packed_json_of with memory standing by for the JSON library's destructors (json_reserve.h).
+std::string packed_json(tinygltf::Model& model, const std::vector<tinygltf::BufferView>& packed,
+                        tinygltf::TinyGLTF& writer, const std::string& bin_name) {
+  std::string json;
+  {
+    const JsonReserve reserve;
+    json = packed_json_of(model, packed, writer, bin_name);
+    reserve.check();
+  }
+  return json;
+}
+
 }  // namespace
 
 std::string glb_bytes(tinygltf::Model& model) {
@@ -137,7 +150,13 @@ std::string glb_bytes(tinygltf::Model& model) {
   tinygltf::TinyGLTF writer;
   writer.SetImageWriter(write_no_image, nullptr);
   std::ostringstream stream;
-  return writer.WriteGltfSceneToStream(&model, stream, false, true) ? stream.str() : std::string();
+  bool written;
+  {
+    const JsonReserve reserve;
+    written = writer.WriteGltfSceneToStream(&model, stream, false, true);
+    reserve.check();
+  }
+  return written ? stream.str() : std::string();
 }
 
 size_t glb_size(tinygltf::Model model) {
