@@ -23,7 +23,9 @@ struct StageProblem {
   StreamReport report;
 
   // The bending sphere (642 vertices, `frames` frames): welded, segmented, its steps scaled.
-  StageProblem(size_t frames, const CodecSettings& with) : clips{bending_clip(frames, 0.6, 0.0)}, settings(with) {
+  StageProblem(size_t frames, const CodecSettings& with) : StageProblem(bending_clip(frames, 0.6, 0.0), with) {}
+  // Any clip, set up alike.
+  StageProblem(const FrameSequence& clip, const CodecSettings& with) : clips{clip}, settings(with) {
     base = quantized_base(clips[0]);
     EXPECT_TRUE(set_up_problem(problem, content).ok());
     EXPECT_TRUE(segment_first_frame(problem, segmentations, report).ok());

@@ -32,6 +32,10 @@ constexpr int kSteps = 24;
 constexpr double kFinestStep = 0.1, kCoarsestStep = 24;
 // A basis vector's estimated price while choosing: its entries at this many bits each, and its step.
 constexpr double kEstimatedBitsPerEntry = 4;
+// The stream's basis is first found capped (pca_basis) when its eigenproblem is at least this large: choices use few
+// of its vectors (at most 27 of the 377 the energy keeps on the chicken), and the uncapped basis, its projections and
+// options cost a third of the encode there.
+constexpr Eigen::Index kCappedBasisFrom = 64;
 
 // Evenly spaced vertices of `rows` (their three axes' rows side by side, as members and the stream list them), at most
 // `most` rows in all (all of them when there are no more): the rows that inform a basis and its options. Whole
@@ -112,8 +116,11 @@ std::vector<size_t> basis_sizes(size_t most) {
 // same vectors, for a smaller eigenproblem). Only the vectors before the point where the energy left (the
 // eigenvalues after them) is below `negligible`, and none of no energy: the eigenvalues decide how many, and only
 // those vectors are computed (LargestEigenvectors, which signs each eigenvector so that its largest entry is positive;
-// in the dual form that is the n-vector's sign, before it is taken back through the rows).
-Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible) {
+// in the dual form that is the n-vector's sign, before it is taken back through the rows). `capped`: at most the
+// vectors LargestEigenvectors finds one by one (a quarter of the eigenproblem's size, when that is at least
+// kCappedBasisFrom), and whether that cap kept fewer than the energy would into *capped; the first vectors are then
+// those of an uncapped basis that also finds them one by one.
+Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible, bool* capped = nullptr) {
   Eigen::MatrixXd scaled = rows;
   for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
   const bool dual = scaled.rows() < scaled.cols();
@@ -131,6 +138,11 @@ Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double n
   Eigen::Index kept = 0;
   for (Eigen::Index i = values.size() - 1; i >= 0 && left > negligible && values(i) > largest * 1e-12; --i, ++kept)
     left -= values(i);
+  if (capped != nullptr) {
+    const Eigen::Index most = n >= kCappedBasisFrom ? n / 4 : n;
+    *capped = kept > most;
+    kept = std::min(kept, most);
+  }
   const Eigen::MatrixXd vectors = solver.vectors(kept);
   Matrix basis(kept, scaled.cols());
   for (Eigen::Index j = 0; j < kept; ++j) {
@@ -296,6 +308,36 @@ Choice choose(const std::vector<std::vector<Option>>& options, double budget, co
   return best;
 }
 
+// Whether a choice made with the stream's basis capped at `cap` vectors might have been another with more of them:
+// none met the budget, or the choice uses the last basis size below the cap, or, for a cluster whose options reached
+// the cap (rather than its energy criterion), its best option of the most stream vectors still costs less (bits +
+// lambda × error) than its best of the size before: the vectors near the cap still pay, and those after them, of
+// less energy each, might too.
+bool may_want_more(const Choice& choice, const std::vector<std::vector<Option>>& options,
+                   const std::vector<std::vector<double>>& stream_energy, size_t cap) {
+  if (std::isinf(choice.bits)) return true;
+  const size_t used = choice.stream_vectors;
+  if (std::max(used + 1, used * 5 / 4) > cap) return true;
+  const double lambda = choice.lambda;
+  for (size_t k = 0; k < options.size(); ++k) {
+    if (stream_energy[k].size() < cap) continue;  // its options are those it has uncapped
+    size_t most = 0, before = 0;
+    for (const Option& o : options[k])
+      if (o.source == format::kBasisStream) most = std::max(most, o.m);
+    for (const Option& o : options[k])
+      if (o.source == format::kBasisStream && o.m < most) before = std::max(before, o.m);
+    double at_most = INFINITY, at_before = INFINITY;
+    for (const Option& o : options[k]) {
+      if (o.source != format::kBasisStream) continue;
+      const double cost = o.bits + lambda * o.error;
+      if (o.m == most) at_most = std::min(at_most, cost);
+      if (o.m == before) at_before = std::min(at_before, cost);
+    }
+    if (at_most < at_before * (1 - 1e-9)) return true;  // less by more than rounding
+  }
+  return false;
+}
+
 // A basis as the stream carries it: the first m vectors, each with the step that minimizes bits + lambda × error
 // for a vector whose coefficients have squared norm `energy` (an entry's error reaches the frames through them):
 // F log2(1 / step) + lambda energy F step² / 12 is least at step² = 6 / (lambda ln 2 energy); at most half the
@@ -424,8 +466,11 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
   // Two rounds of items on the threads, each item's work its own: first the stream's basis (the one largest
   // eigenproblem) and each cluster's own basis and options, then each cluster's options in the stream's basis (which
   // needs it). Larger clusters first, so that no thread is left with a large one at the end. Each cluster's options
-  // are then listed as they always are: none, in the stream's basis, in its own.
+  // are then listed as they always are: none, in the stream's basis, in its own. The stream's basis is capped at
+  // first (pca_basis); should a choice reach the cap, the stream's basis and options are found again uncapped, as
+  // they are where there is no cap, and the choice made again.
   Matrix stream_basis;
+  bool stream_capped = false;
   std::vector<Matrix> own_basis(clusters);
   std::vector<std::vector<double>> own_energy(clusters), stream_energy(clusters);
   std::vector<std::vector<Option>> options(clusters), own_options(clusters);
@@ -452,15 +497,18 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
     return out;
   };
   const size_t threads = thread_count(problem.settings.threads);
+  auto find_stream_basis = [&](bool capped) {
+    std::vector<Eigen::Index> all(welded * 3);
+    for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
+    const std::vector<Eigen::Index> which = sample(all, most_rows);
+    Matrix sampled;
+    std::vector<double> sampled_weight;
+    gather(rows, weight, which, double(all.size()) / double(which.size()), sampled, sampled_weight);
+    stream_basis = pca_basis(sampled, sampled_weight, negligible, capped ? &stream_capped : nullptr);
+  };
   parallel_items(clusters + 1, threads, [&](size_t item) {
     if (item == 0) {
-      std::vector<Eigen::Index> all(welded * 3);
-      for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
-      const std::vector<Eigen::Index> which = sample(all, most_rows);
-      Matrix sampled;
-      std::vector<double> sampled_weight;
-      gather(rows, weight, which, double(all.size()) / double(which.size()), sampled, sampled_weight);
-      stream_basis = pca_basis(sampled, sampled_weight, negligible);
+      find_stream_basis(true);
       return;
     }
     const size_t k = order[item - 1];
@@ -471,8 +519,9 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
     add_options(in_own, own.weight, own.scale, own.total, format::kBasisOwn, unit, bits_per_vector, negligible,
                 own_options[k], own_energy[k]);
   });
-  parallel_items(clusters, threads, [&](size_t item) {
+  auto list_options = [&](size_t item) {
     const size_t k = order[item];
+    options[k].clear();
     if (members[k].empty()) {
       options[k].push_back({format::kBasisNone, 0, 0, 8, 0.0});
       return;
@@ -483,13 +532,20 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
     add_options(in_stream, own.weight, own.scale, own.total, format::kBasisStream, unit, bits_per_vector, negligible,
                 options[k], stream_energy[k]);
     options[k].insert(options[k].end(), own_options[k].begin(), own_options[k].end());
-  });
+  };
+  parallel_items(clusters, threads, list_options);
   // Choose, then measure the decoder's frames exactly; tighten the budget until they meet it.
   const std::vector<size_t> basis_size_list = basis_sizes(frames);
   double target = budget;
   StreamContent transformed;
   for (int attempt = 0; attempt < 8; ++attempt) {
-    const Choice choice = choose(options, target, basis_size_list, bits_per_vector, threads);
+    Choice choice = choose(options, target, basis_size_list, bits_per_vector, threads);
+    if (stream_capped && may_want_more(choice, options, stream_energy, size_t(stream_basis.rows()))) {
+      stream_capped = false;
+      find_stream_basis(false);
+      parallel_items(clusters, threads, list_options);
+      choice = choose(options, target, basis_size_list, bits_per_vector, threads);
+    }
     if (std::isinf(choice.bits)) return false;
     transformed = content;
     with_bases(choice, stream_basis, stream_energy, own_basis, own_energy, transformed);
