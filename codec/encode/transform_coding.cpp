@@ -159,37 +159,40 @@ struct Option {
   double step = 0, bits = 0, error = 0;
 };
 
-// Zeroth-order bits of the quantized values of column `column` (step `step`), and their squared quantization error
-// (each row weighted) into `quantization`.
-double column_bits(const Matrix& coefficients, Eigen::Index column, double step, const std::vector<double>& weight,
+// Zeroth-order bits of the n values `column` quantized with step `step`, and their squared quantization error (each
+// weighted) into `quantization`.
+double column_bits(const double* column, size_t n, double step, const std::vector<double>& weight,
                    double& quantization, std::vector<uint32_t>& counts) {
-  const size_t n = size_t(coefficients.rows());
-  const double inverse = 1 / step, reach = coefficients.col(column).cwiseAbs().maxCoeff() * inverse;
-  quantization = 0;
+  const double inverse = 1 / step;
+  double largest = 0;
+  for (size_t r = 0; r < n; ++r) largest = std::max(largest, std::abs(column[r]));
+  const double reach = largest * inverse;
   auto add = [&](uint32_t count) { return count ? -double(count) * std::log2(double(count) / double(n)) : 0.0; };
-  double bits = 0;
+  double bits = 0, error = 0;
   if (reach <= 4.0 * double(n) + 64) {  // a histogram over the values' range
     const int64_t span = int64_t(reach + 0.5) + 1;
     counts.assign(size_t(2 * span + 1), 0);
     for (size_t r = 0; r < n; ++r) {
-      const double c = coefficients(Eigen::Index(r), column);
+      const double c = column[r];
       const int64_t index = quantizer_index(c * inverse);
       const double q = double(index);
       ++counts[size_t(index + span)];
-      quantization += weight[r] * (c - q * step) * (c - q * step);
+      error += weight[r] * (c - q * step) * (c - q * step);
     }
     for (uint32_t count : counts) bits += add(count);
+    quantization = error;
     return bits;
   }
   std::unordered_map<int64_t, uint32_t> map;
   for (size_t r = 0; r < n; ++r) {
-    const double c = coefficients(Eigen::Index(r), column);
+    const double c = column[r];
     const int64_t index = quantizer_index(c * inverse);
     const double q = double(index);
     ++map[index];
-    quantization += weight[r] * (c - q * step) * (c - q * step);
+    error += weight[r] * (c - q * step) * (c - q * step);
   }
   for (const auto& entry : map) bits += add(entry.second);
+  quantization = error;
   return bits;
 }
 
@@ -204,12 +207,16 @@ void add_options(const Matrix& coefficients, const std::vector<double>& weight, 
   const size_t n = size_t(coefficients.rows());
   energy.clear();
   double left = total;
-  for (Eigen::Index i = 0; i < coefficients.cols() && left > negligible; ++i) {
+  Eigen::Index tried = 0;
+  for (; tried < coefficients.cols() && left > negligible; ++tried) {
     double e = 0;
-    for (size_t r = 0; r < n; ++r) e += weight[r] * coefficients(Eigen::Index(r), i) * coefficients(Eigen::Index(r), i);
+    for (size_t r = 0; r < n; ++r)
+      e += weight[r] * coefficients(Eigen::Index(r), tried) * coefficients(Eigen::Index(r), tried);
     energy.push_back(e);
     left -= e;
   }
+  // The vectors tried, each a column of its own (the histograms read them whole, a step at a time).
+  const Eigen::MatrixXd columns = coefficients.leftCols(tried);
   const std::vector<size_t> sizes = basis_sizes(energy.size());
   std::vector<uint32_t> counts;
   for (int d = 0; d < kSteps; ++d) {
@@ -220,7 +227,7 @@ void add_options(const Matrix& coefficients, const std::vector<double>& weight, 
       if (size == 0) continue;
       for (; m < size; ++m) {
         double q = 0;
-        bits += column_bits(coefficients, Eigen::Index(m), step, weight, q, counts);
+        bits += column_bits(columns.col(Eigen::Index(m)).data(), n, step, weight, q, counts);
         quantization += q;
         kept += energy[m];
       }
