@@ -119,6 +119,36 @@ TEST(Pipeline, EncodesAreTheSameBytesForEveryThreadCount) {
   }
 }
 
+// --targets auto encodes a file twice (morph targets kept, then baked); its kept skins are the same in both, so the
+// second encode takes the tracks' distance the first's search settled on when that stays within the goal on every
+// frame: one measurement instead of a search. RobotExpressive (kept targets and kept skins), when ../shared is present.
+TEST(Pipeline, TheSecondTargetsVariantStartsFromTheFirstsTrackDistance) {
+  const std::string file = std::string(SEGMORPH_SHARED_SAMPLES_DIR) + "/gltf/RobotExpressive/RobotExpressive.glb";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "../shared/samples is absent: " << file << " is not encoded";
+  Model original;
+  ASSERT_TRUE(Model::load(file, original).ok());
+  EncodeSettings settings;  // an error target, --targets auto
+  ASSERT_EQ(settings.targets, EncodeSettings::Targets::automatic);
+  std::vector<std::string> first, second;  // the kept skins' measurements of each encode
+  bool again = false;
+  const Progress progress = [&](const std::string& line) {
+    if (line.find("encoding again with the morph targets baked") != std::string::npos) again = true;
+    if (line.find("kept skins: tracks within") != std::string::npos) (again ? second : first).push_back(line);
+  };
+  Model encoded;
+  EncodeReport report;
+  ASSERT_TRUE(encode(original, settings, encoded, &report, progress).ok());
+  ASSERT_TRUE(again);
+  ASSERT_GT(first.size(), 1u);
+  ASSERT_EQ(second.size(), 1u);
+  // "kept skins: tracks within D: KG K % (every frame, measurement 1)", D as the first's last measurement has it.
+  const std::string settled = first.back().substr(0, first.back().find(": KG"));
+  EXPECT_EQ(second[0].substr(0, second[0].find(": KG")), settled);
+  EXPECT_NE(first.back().find("every frame"), std::string::npos);
+  EXPECT_NE(second[0].find("every frame, measurement 1"), std::string::npos);
+  EXPECT_LE(report.kg_percent, settings.target);
+}
+
 TEST(Pipeline, BakeWritesMorphTargets) {
   Model model;
   ASSERT_TRUE(Model::load(sample("RiggedSimple/RiggedSimple.glb"), model).ok());

@@ -43,6 +43,7 @@ struct Encoded {
   tinygltf::Model model;
   CompressReport report;
   double kept_skins_floor = 0;  // when kept skins cannot reach the --error target: the KG % they stay at
+  double track_distance = 0;    // the distance the search for kept skins settled on (0 without one)
   std::vector<PrimitiveMode> modes;  // per sampled node: frames, kept targets or kept skin
   std::vector<int> rigid_meshes;     // meshes of the encode compressed as rigid meshes
   double ms_tracks = 0;
@@ -53,6 +54,7 @@ struct EncodeChoices {
   CodecSettings codec;
   DracoSettings draco;
   bool keep_skins = true;
+  double settled_track_distance = 0;  // code_tracks' `settled`
 };
 
 // Bits per vertex per frame are counted over Σ V × F of the sampled primitives and clips.
@@ -78,6 +80,7 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
   name_generator(out.model);  // before any size is measured
   out.report = CompressReport();
   out.kept_skins_floor = 0;
+  out.track_distance = 0;
   out.modes.assign(file.sampled.size(), PrimitiveMode::frames);
   out.rigid_meshes.clear();
   std::vector<const SampledNode*> kept, baked;
@@ -114,10 +117,12 @@ Status encode_model_once(const SampledFile& file, const std::vector<bool>& keep,
   say(kept_skins.empty() ? "coding the animation tracks" : "coding the animation tracks, measuring the kept skins' error");
   TrackCoding tracks;
   const auto begin = std::chrono::steady_clock::now();
-  SEGMORPH_RETURN_IF_ERROR(code_tracks(file, codec, !kept_skins.empty(), out.model, tracks, progress));
+  SEGMORPH_RETURN_IF_ERROR(
+      code_tracks(file, codec, !kept_skins.empty(), out.model, tracks, progress, choices.settled_track_distance));
   out.ms_tracks = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
   out.report.animation_bytes += tracks.bytes;
   out.kept_skins_floor = tracks.kept_skins_floor;
+  out.track_distance = tracks.searched_distance;
   return Status::Ok();
 }
 
@@ -312,7 +317,10 @@ Status encode_sampled(SampledFile& file, const EncodeSettings& settings, tinyglt
     // Either variant may be refused (a --bpvf target below what its rest takes); the other then stands alone.
     Encoded baked;
     report_progress(progress, "encoding again with the morph targets baked, to compare");
-    const Status baked_status = encode_model(file, std::vector<bool>(keep.size(), false), choices, progress, baked);
+    // Its kept skins are the first's: their tracks start from the distance the first's search settled on.
+    EncodeChoices again = choices;
+    if (status.ok()) again.settled_track_distance = encoded.track_distance;
+    const Status baked_status = encode_model(file, std::vector<bool>(keep.size(), false), again, progress, baked);
     if (!status.ok() && baked_status.ok()) {
       report_progress(progress, "keeping the morph targets was refused (" + status.message() + "); the baked file stands");
       encoded = std::move(baked), status = baked_status;

@@ -74,7 +74,7 @@ Status measured_kg(const SampledFile& file, const std::vector<SampledNode>& refe
 }  // namespace
 
 Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kept_skins, tinygltf::Model& model,
-                   TrackCoding& coding, const Progress& progress) {
+                   TrackCoding& coding, const Progress& progress, double settled) {
   coding = TrackCoding();
   const double diagonal = scene_diagonal(model);
   const double first = kTrackDistanceRatio * error_target(codec) / 100 * diagonal;
@@ -121,6 +121,15 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
     return Status::Ok();
   };
   bool ok = false;
+  // Settled on by a search for the same skins: that distance, when it stays within the goal here.
+  auto settle = [&](double at) {
+    coding.searched_distance = at;
+    return encode(at, model);
+  };
+  if (settled > 0) {
+    SEGMORPH_RETURN_IF_ERROR(within_goal(settled, true, ok));
+    if (ok) return settle(settled);
+  }
   double distance = first;
   for (int round = 0; round < kBracketRounds; ++round) {
     SEGMORPH_RETURN_IF_ERROR(within_goal(distance, false, ok));
@@ -135,13 +144,13 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
   }
   if (within == 0) {  // even the finest distance tried is above the goal: its error on every frame is the floor
     SEGMORPH_RETURN_IF_ERROR(within_goal(distance * 2, true, ok));
-    if (ok) return encode(distance * 2, model);
+    if (ok) return settle(distance * 2);
   }
-  if (within > 0 && whole) return encode(within, model);  // measured on every frame already
+  if (within > 0 && whole) return settle(within);  // measured on every frame already
   // The subsample's choice, measured on every frame: finer while a frame left out is above the goal.
   for (int round = 0; within > 0 && round < kBracketRounds; ++round, within /= 2) {
     SEGMORPH_RETURN_IF_ERROR(within_goal(within, true, ok));
-    if (ok) return encode(within, model);
+    if (ok) return settle(within);
   }
   // No distance brings the error within the goal: it is not the tracks' (a kept skin's weights are bytes).
   coding = TrackCoding();

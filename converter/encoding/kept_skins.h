@@ -16,6 +16,8 @@ struct TrackCoding {
   // > 0 when no track precision brings the kept skins within the target: the KG % they stay at. The tracks are then
   // not coded (the caller bakes the skins instead).
   double kept_skins_floor = 0;
+  // The distance the search for kept skins settled on (0 without one).
+  double searched_distance = 0;
 };
 
 // Codes the translation, rotation and scale tracks of `model`, an encode of file's model. With `kept_skins` and an
@@ -23,8 +25,10 @@ struct TrackCoding {
 // target (a bracket by doublings or halvings, then bisections in log distance); otherwise at a distance in
 // proportion to the error target and the scene's diagonal.
 // The search measures on a subsample of frames (at most 24 per clip), then checks its choice on every frame, halving
-// the distance while that is above the goal; each measurement is a progress line.
+// the distance while that is above the goal; each measurement is a progress line. `settled`, when > 0: the distance
+// a search for the same kept skins settled on in another encode of the file (the other variant of --targets auto),
+// measured on every frame first and kept, without a search, when that is within the goal.
 Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kept_skins, tinygltf::Model& model,
-                   TrackCoding& coding, const Progress& progress);
+                   TrackCoding& coding, const Progress& progress, double settled = 0);
 
 }  // namespace segmorph
