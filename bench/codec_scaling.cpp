@@ -2,7 +2,7 @@
 // built in memory: a torus of about V vertices (a regular grid of rings, one connected closed surface) whose
 // ring and tube radii swell in travelling waves while it bends, twists and drifts: smooth, non-rigid motion
 // that looks the same at every resolution, so only V and F change between runs.
-//   codec_scaling --vertices V --frames F [--error E | --bpvf R]
+//   codec_scaling --vertices V --frames F [--error E | --bpvf R] [--threads N]
 //   codec_scaling --vertices V --frames F --write-cache PREFIX
 // One run measures one (V, F) point and prints one JSON object on stdout:
 //   vertices, frames, triangles, input_mb (the frames, V × F × 3 floats), clusters, stream_bytes, bpvf (the
@@ -162,10 +162,14 @@ int main(int argc, char** argv) {
       settings.mode = RateMode::error, settings.target = std::atof(argv[++i]);
     else if (i + 1 < argc && arg == "--bpvf")
       settings.mode = RateMode::bpvf, settings.target = std::atof(argv[++i]);
+    else if (i + 1 < argc && arg == "--threads")  // the encoder's and the decoder's (0: every core; default 1)
+      settings.threads = size_t(std::atol(argv[++i]));
     else if (i + 1 < argc && arg == "--write-cache")
       cache = argv[++i];
     else {
-      std::fprintf(stderr, "usage: codec_scaling --vertices V --frames F [--error E | --bpvf R | --write-cache PREFIX]\n");
+      std::fprintf(stderr,
+                   "usage: codec_scaling --vertices V --frames F [--error E | --bpvf R | --write-cache PREFIX] "
+                   "[--threads N]\n");
       return 2;
     }
   }
@@ -225,7 +229,7 @@ int main(int argc, char** argv) {
   peak_reset = reset_peak_rss() && peak_reset;
   std::vector<FrameSequence> decoded;
   start = Clock::now();
-  status = decode_animation(stream.data(), stream.size(), base, clip.triangles, decoded);
+  status = decode_animation(stream.data(), stream.size(), base, clip.triangles, decoded, settings.threads);
   const double decode_ms = milliseconds_since(start);
   const long decode_kb = peak_rss_kb();
   if (!status.ok() || decoded.size() != 1) {

@@ -284,6 +284,41 @@ TEST(TransformResiduals, GpuPlayableWritesVersionFourWithinTheTarget) {
   }
 }
 
+// decode_animation_into decodes into clips the caller has shaped: the same floats as decode_animation, for a
+// version-4 stream on 1 and 3 threads and for a residual-loop stream; clips shaped otherwise are refused.
+TEST(TransformResiduals, DecodesIntoShapedClipsAsDecodeAnimationDoes) {
+  const std::vector<FrameSequence> clips = two_clips();
+  const std::vector<float> base = quantized_base(clips[0]);
+  for (const CodecSettings& settings : {error(0.15), residual_loop(error(0.15))}) {
+    const Encoded encoded = encode(clips, base, settings);
+    std::vector<FrameSequence> whole;
+    ASSERT_TRUE(decode_animation(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles, whole).ok());
+    ASSERT_EQ(whole.size(), clips.size());
+    for (size_t threads : {1, 3}) {
+      std::vector<FrameSequence> shaped = clips;
+      for (FrameSequence& clip : shaped) std::fill(clip.positions.begin(), clip.positions.end(), -1.0f);
+      ASSERT_TRUE(decode_animation_into(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles, shaped,
+                                        threads).ok());
+      for (size_t c = 0; c < clips.size(); ++c) EXPECT_EQ(shaped[c].positions, whole[c].positions) << c;
+    }
+    auto refused = [&](std::vector<FrameSequence> shaped, const char* what) {
+      EXPECT_EQ(decode_animation_into(encoded.stream.data(), encoded.stream.size(), base, clips[0].triangles, shaped)
+                    .code(),
+                StatusCode::invalid_argument)
+          << what;
+    };
+    std::vector<FrameSequence> shaped = clips;
+    shaped.pop_back();
+    refused(shaped, "a clip fewer");
+    shaped = clips;
+    shaped[1].frame_count -= 1;
+    refused(shaped, "a frame fewer");
+    shaped = clips;
+    shaped[0].positions.pop_back();
+    refused(shaped, "positions short");
+  }
+}
+
 // A stream that breaks version 4's rules is refused, never decoded: residual-loop flags, a basis source or size out
 // of range, a bad step, a coefficient beyond the limit; and every prefix of a valid stream.
 TEST(TransformResidualsHostile, BrokenStreamsAreRefused) {

@@ -344,13 +344,39 @@ Status reconstruct_clips(const StreamContent& content, const std::vector<float>&
   return collect_clips(content, loop.block_frames(), begin_clip, append, clips);
 }
 
-Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
-                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips, size_t threads) {
+namespace {
+
+// FrameDecoder::open after decode_animation's checks of the base and triangles.
+Status open_checked(FrameDecoder& decoder, const uint8_t* data, size_t size, const std::vector<float>& base,
+                    const std::vector<uint32_t>& triangles) {
   if (base.size() % 3 != 0) return Status(StatusCode::invalid_argument, "base positions must be V × 3");
   for (uint32_t index : triangles)
     if (index >= base.size() / 3) return Status(StatusCode::invalid_argument, "a triangle names a missing vertex");
+  return decoder.open(data, size, base, triangles);
+}
+
+}  // namespace
+
+Status decode_animation_into(const uint8_t* data, size_t size, const std::vector<float>& base,
+                             const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips,
+                             size_t threads) {
   FrameDecoder decoder;
-  SEGMORPH_RETURN_IF_ERROR(decoder.open(data, size, base, triangles));
+  SEGMORPH_RETURN_IF_ERROR(open_checked(decoder, data, size, base, triangles));
+  const StreamContent& content = decoder.content();
+  bool same = clips.size() == content.clip_frames.size();
+  for (size_t c = 0; same && c < clips.size(); ++c)
+    same = clips[c].vertex_count == content.vertex_count && clips[c].frame_count == content.clip_frames[c] &&
+           clips[c].positions.size() == size_t(clips[c].frame_count) * clips[c].vertex_count * 3;
+  if (!same) return Status(StatusCode::invalid_argument, "the clips are not shaped as the stream's");
+  for (FrameSequence& clip : clips)
+    SEGMORPH_RETURN_IF_ERROR(decoder.decode_frames(clip.frame_count, clip.positions.data(), threads));
+  return Status::Ok();
+}
+
+Status decode_animation(const uint8_t* data, size_t size, const std::vector<float>& base,
+                        const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips, size_t threads) {
+  FrameDecoder decoder;
+  SEGMORPH_RETURN_IF_ERROR(open_checked(decoder, data, size, base, triangles));
   const StreamContent& content = decoder.content();
   // The frames grow as they are decoded, never sized by the counts alone: a stream of a few bytes can claim
   // format::kMaxVertexFrames positions (gigabytes), and its data runs out long before memory would.

@@ -171,4 +171,11 @@ Status decode_animation(const uint8_t* data, size_t size, const std::vector<floa
                         const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips,
                         size_t threads = 1);
 
+// decode_animation into clips the caller has shaped (the encoder, decoding a stream it has just written): as many as
+// the stream has, each with the stream's vertex and frame counts and its positions sized to them. The frames are
+// decoded where they will stay, with no growing and copying. invalid_argument when the shapes differ.
+Status decode_animation_into(const uint8_t* data, size_t size, const std::vector<float>& base,
+                             const std::vector<uint32_t>& triangles, std::vector<FrameSequence>& clips,
+                             size_t threads = 1);
+
 }  // namespace segmorph

@@ -187,20 +187,13 @@ Status try_transform(const EncodeProblem& problem, StreamContent&& content, std:
                   "frames, its bases' entries and coefficients); without the GPU-playable setting this primitive "
                   "gets stream version 3");
   if (made && (required || candidate.size() < stream.size())) {
-    // Its frames replace the residual loop's: the decoder's, decoded once the others are gone.
-    std::vector<std::vector<float>> times(restored.size());
-    for (size_t c = 0; c < restored.size(); ++c) times[c] = std::move(restored[c].times);
-    restored.clear();
-    std::vector<FrameSequence> frames;
-    const Status decoded =
-        decode_animation(candidate.data(), candidate.size(), problem.base, problem.clips[0].triangles, frames,
-                         problem.settings.threads);
-    if (!decoded.ok() || frames.size() != times.size())
+    // Its frames replace the residual loop's: the decoder's, decoded where the residual loop's were, in place.
+    const Status decoded = decode_animation_into(candidate.data(), candidate.size(), problem.base,
+                                                 problem.clips[0].triangles, restored, problem.settings.threads);
+    if (!decoded.ok())
       return Status(StatusCode::internal,
                     "the version-4 stream the encoder measured does not decode: " + decoded.message());
     stream = std::move(candidate);
-    for (size_t c = 0; c < frames.size(); ++c) frames[c].times = std::move(times[c]);
-    restored = std::move(frames);
     report.bytes_motion = sizes.motion;
     report.bytes_residuals = sizes.residuals;
     report.bytes_total = stream.size();
