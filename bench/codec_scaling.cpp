@@ -5,7 +5,7 @@
 //   codec_scaling --vertices V --frames F [--error E | --bpvf R] [--threads N]
 //   codec_scaling --vertices V --frames F --write-cache PREFIX
 // One run measures one (V, F) point and prints one JSON object on stdout:
-//   vertices, frames, triangles, input_mb (the frames, V × F × 3 floats), clusters, stream_bytes, bpvf (the
+//   vertices, frames, threads (the setting: 0 is every core), triangles, input_mb (the frames, V × F × 3 floats), clusters, stream_bytes, bpvf (the
 //   stream's), kg_percent (decoded against the input), milliseconds {generate, draco, segmentation, motion,
 //   prediction, rate_control, entropy, encode (the whole encode_animation), decode, copy (the restored frames
 //   copied once: the practical limit of a decoder)} and peak_rss_kb {input, encode, decode}: the process's peak
@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
       settings.mode = RateMode::error, settings.target = std::atof(argv[++i]);
     else if (i + 1 < argc && arg == "--bpvf")
       settings.mode = RateMode::bpvf, settings.target = std::atof(argv[++i]);
-    else if (i + 1 < argc && arg == "--threads")  // the encoder's and the decoder's (0: every core; default 1)
+    else if (i + 1 < argc && arg == "--threads" && std::atol(argv[i + 1]) >= 0)  // 0: every core; default 1
       settings.threads = size_t(std::atol(argv[++i]));
     else if (i + 1 < argc && arg == "--write-cache")
       cache = argv[++i];
@@ -248,11 +248,11 @@ int main(int argc, char** argv) {
   accumulator.add(clip, decoded[0]);
   const ErrorMetrics metrics = accumulator.result();
   std::printf(
-      "{\"vertices\":%zu,\"frames\":%zu,\"triangles\":%zu,\"input_mb\":%.1f,\"clusters\":%zu,\"stream_bytes\":%zu,"
+      "{\"vertices\":%zu,\"frames\":%zu,\"threads\":%zu,\"triangles\":%zu,\"input_mb\":%.1f,\"clusters\":%zu,\"stream_bytes\":%zu,"
       "\"bpvf\":%.4f,\"kg_percent\":%.6g,\"milliseconds\":{\"generate\":%.1f,\"draco\":%.1f,\"segmentation\":%.1f,"
       "\"motion\":%.1f,\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"encode\":%.1f,\"decode\":%.1f,"
       "\"copy\":%.2f},\"peak_rss_kb\":{\"input\":%ld,\"encode\":%ld,\"decode\":%ld},\"peak_reset\":%s}\n",
-      clip.vertex_count, frames, clip.triangle_count(), double(clip.positions.size() * sizeof(float)) / 1e6,
+      clip.vertex_count, frames, settings.threads, clip.triangle_count(), double(clip.positions.size() * sizeof(float)) / 1e6,
       report.clusters, stream.size(), bits_per_vertex_frame(stream.size(), clip.vertex_count, frames),
       metrics.kg_percent, generate_ms, draco_ms, report.ms_segmentation, report.ms_motion, report.ms_prediction,
       report.ms_rate_control, report.ms_entropy, encode_ms, decode_ms, copy_ms, input_kb, encode_kb, decode_kb,

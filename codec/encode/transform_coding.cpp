@@ -215,9 +215,9 @@ void add_options(const Matrix& coefficients, const std::vector<double>& weight, 
     energy.push_back(e);
     left -= e;
   }
-  // The vectors tried, each a column of its own (the histograms read them whole, a step at a time).
-  const Eigen::MatrixXd columns = coefficients.leftCols(tried);
   const std::vector<size_t> sizes = basis_sizes(energy.size());
+  // The vectors the sizes use, each a column of its own (the histograms read them whole, a step at a time).
+  const Eigen::MatrixXd columns = coefficients.leftCols(Eigen::Index(sizes.back()));
   std::vector<uint32_t> counts;
   for (int d = 0; d < kSteps; ++d) {
     const double step = double(float(unit * kFinestStep * std::pow(kCoarsestStep / kFinestStep, d / (kSteps - 1.0))));
@@ -319,9 +319,11 @@ Choice choose(const std::vector<std::vector<Option>>& options, double budget, co
 // none met the budget, or the choice uses the last basis size below the cap, or, for a cluster whose options reached
 // the cap (rather than its energy criterion), its best option of the most stream vectors still costs less (bits +
 // lambda × error) than its best of the size before: the vectors near the cap still pay, and those after them, of
-// less energy each, might too.
+// less energy each in the stream, might too (a heuristic: a cluster's share of them need not fall). Never when the
+// cap reaches the largest basis size the format allows: the uncapped basis would offer no other size.
 bool may_want_more(const Choice& choice, const std::vector<std::vector<Option>>& options,
                    const std::vector<std::vector<double>>& stream_energy, size_t cap) {
+  if (cap >= basis_sizes(format::kMaxBasisSize).back()) return false;  // every size the format allows was there
   if (std::isinf(choice.bits)) return true;
   const size_t used = choice.stream_vectors;
   if (std::max(used + 1, used * 5 / 4) > cap) return true;

@@ -129,6 +129,7 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
   if (settled > 0) {
     SEGMORPH_RETURN_IF_ERROR(within_goal(settled, true, ok));
     if (ok) return settle(settled);
+    matches.clear();  // paired on every frame: the search pairs as it would have without the check
   }
   double distance = first;
   for (int round = 0; round < kBracketRounds; ++round) {
