@@ -5,12 +5,12 @@
 //   codec_scaling --vertices V --frames F [--error E | --bpvf R] [--threads N]
 //   codec_scaling --vertices V --frames F --write-cache PREFIX
 // One run measures one (V, F) point and prints one JSON object on stdout:
-//   vertices, frames, threads (the setting: 0 is every core), triangles, input_mb (the frames, V × F × 3 floats), clusters, stream_bytes, bpvf (the
-//   stream's), kg_percent (decoded against the input), milliseconds {generate, draco, segmentation, motion,
-//   prediction, rate_control, entropy, encode (the whole encode_animation), decode, copy (the restored frames
-//   copied once: the practical limit of a decoder)} and peak_rss_kb {input, encode, decode}: the process's peak
-//   resident set after building the frames, and during the encoder and the decoder (the peak is reset before
-//   each where Linux allows it, /proc/self/clear_refs; peak_reset says whether it did).
+//   vertices, frames, threads (the setting: 0 is every core), triangles, input_mb (the frames, V × F × 3 floats),
+//   clusters, stream_bytes, bpvf (the stream's), kg_percent (decoded against the input), milliseconds {generate,
+//   draco, segmentation, motion, prediction, rate_control, entropy, encode (the whole encode_animation), decode, copy
+//   (the restored frames copied once: the practical limit of a decoder)} and peak_rss_kb {input, encode, decode}:
+//   the process's peak resident set after building the frames, and during the encoder and the decoder (the peak is
+//   reset before each where Linux allows it, /proc/self/clear_refs; peak_reset says whether it did).
 // The base mesh is Draco's (edgebreaker, 14 bits, timed with the decoding and vertex matching the container
 // does); the codec encodes against the stand-in base of the other bench tools so that it sees V vertices in
 // the generator's order. Run one point per process: the peak resident set only grows.
@@ -248,11 +248,12 @@ int main(int argc, char** argv) {
   accumulator.add(clip, decoded[0]);
   const ErrorMetrics metrics = accumulator.result();
   std::printf(
-      "{\"vertices\":%zu,\"frames\":%zu,\"threads\":%zu,\"triangles\":%zu,\"input_mb\":%.1f,\"clusters\":%zu,\"stream_bytes\":%zu,"
-      "\"bpvf\":%.4f,\"kg_percent\":%.6g,\"milliseconds\":{\"generate\":%.1f,\"draco\":%.1f,\"segmentation\":%.1f,"
-      "\"motion\":%.1f,\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"encode\":%.1f,\"decode\":%.1f,"
+      "{\"vertices\":%zu,\"frames\":%zu,\"threads\":%zu,\"triangles\":%zu,\"input_mb\":%.1f,\"clusters\":%zu,"
+      "\"stream_bytes\":%zu,\"bpvf\":%.4f,\"kg_percent\":%.6g,\"milliseconds\":{\"generate\":%.1f,\"draco\":%.1f,"
+      "\"segmentation\":%.1f,\"motion\":%.1f,\"prediction\":%.1f,\"rate_control\":%.1f,\"entropy\":%.1f,\"encode\":%.1f,\"decode\":%.1f,"
       "\"copy\":%.2f},\"peak_rss_kb\":{\"input\":%ld,\"encode\":%ld,\"decode\":%ld},\"peak_reset\":%s}\n",
-      clip.vertex_count, frames, settings.threads, clip.triangle_count(), double(clip.positions.size() * sizeof(float)) / 1e6,
+      clip.vertex_count, frames, settings.threads, clip.triangle_count(),
+      double(clip.positions.size() * sizeof(float)) / 1e6,
       report.clusters, stream.size(), bits_per_vertex_frame(stream.size(), clip.vertex_count, frames),
       metrics.kg_percent, generate_ms, draco_ms, report.ms_segmentation, report.ms_motion, report.ms_prediction,
       report.ms_rate_control, report.ms_entropy, encode_ms, decode_ms, copy_ms, input_kb, encode_kb, decode_kb,

@@ -207,11 +207,9 @@ void add_options(const Matrix& coefficients, const std::vector<double>& weight, 
   const size_t n = size_t(coefficients.rows());
   energy.clear();
   double left = total;
-  Eigen::Index tried = 0;
-  for (; tried < coefficients.cols() && left > negligible; ++tried) {
+  for (Eigen::Index i = 0; i < coefficients.cols() && left > negligible; ++i) {
     double e = 0;
-    for (size_t r = 0; r < n; ++r)
-      e += weight[r] * coefficients(Eigen::Index(r), tried) * coefficients(Eigen::Index(r), tried);
+    for (size_t r = 0; r < n; ++r) e += weight[r] * coefficients(Eigen::Index(r), i) * coefficients(Eigen::Index(r), i);
     energy.push_back(e);
     left -= e;
   }
@@ -330,11 +328,9 @@ bool may_want_more(const Choice& choice, const std::vector<std::vector<Option>>&
   const double lambda = choice.lambda;
   for (size_t k = 0; k < options.size(); ++k) {
     if (stream_energy[k].size() < cap) continue;  // its options are those it has uncapped
-    size_t most = 0, before = 0;
-    for (const Option& o : options[k])
-      if (o.source == format::kBasisStream) most = std::max(most, o.m);
-    for (const Option& o : options[k])
-      if (o.source == format::kBasisStream && o.m < most) before = std::max(before, o.m);
+    // Its stream options' sizes (add_options): 0, 1, 2, ... up to its vectors tried, at least the cap's 16.
+    const std::vector<size_t> sizes = basis_sizes(stream_energy[k].size());
+    const size_t most = sizes.back(), before = sizes[sizes.size() - 2];
     double at_most = INFINITY, at_before = INFINITY;
     for (const Option& o : options[k]) {
       if (o.source != format::kBasisStream) continue;
