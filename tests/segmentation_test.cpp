@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <set>
+#include <thread>
+#include <vector>
 
 #include "test_meshes.h"
 
@@ -85,6 +87,50 @@ TEST(Segmentation, MergeJoinsClustersThatMoveAlikeFirst) {
   EXPECT_EQ(strip(0), strip(1));
   EXPECT_NE(strip(1), strip(2));
   EXPECT_NE(strip(2), strip(3));
+}
+
+TEST(Segmentation, SharedMergesGiveEachTargetWhatItsOwnMergeGives) {
+  // Sixteen column strips of a grid, each turning by its own angle: a target asked after a smaller one (whose merges
+  // went further) must get the clusters of the merges down to it only, from any thread.
+  const Grid grid = make_grid(15, [](int, int) { return false; });
+  const size_t vertex_count = grid.topology.welded_count();
+  Clusters clusters;
+  clusters.count = 16;
+  for (size_t v = 0; v < vertex_count; ++v) clusters.label.push_back(uint32_t(grid.base[v * 3]));
+  Trajectories frames;
+  frames.vertex_count = vertex_count;
+  frames.frame_count = 4;
+  for (int f = 0; f < 4; ++f)
+    for (size_t v = 0; v < vertex_count; ++v) {
+      const float x = grid.base[v * 3], y = grid.base[v * 3 + 1];
+      const uint32_t k = clusters.label[v];
+      const float angle = 0.03f * float((k * 7) % 5) * float(f) + 0.01f * float(k % 3);
+      frames.positions.insert(frames.positions.end(), {x * std::cos(angle) - y * std::sin(angle),
+                                                       x * std::sin(angle) + y * std::cos(angle), 0.1f * float(k)});
+    }
+  const std::vector<size_t> targets = {9, 3, 12, 1, 5, 16, 20, 0, 7};
+  std::vector<Clusters> alone;
+  for (size_t target : targets)
+    alone.push_back(merge_clusters(clusters, target, grid.base.data(), frames, grid.adjacency));
+  EXPECT_EQ(alone[0].count, 9u);
+  EXPECT_EQ(alone[1].count, 3u);
+  EXPECT_EQ(alone[6].count, 16u);
+  const ClusterMerges merges(clusters, grid.base.data(), frames, grid.adjacency);
+  for (size_t i = 0; i < targets.size(); ++i) {
+    const Clusters shared = merges.at(targets[i]);
+    EXPECT_EQ(shared.count, alone[i].count) << "target " << targets[i];
+    EXPECT_EQ(shared.label, alone[i].label) << "target " << targets[i];
+  }
+  // The same from threads, each asking for its own targets at once.
+  const ClusterMerges threaded(clusters, grid.base.data(), frames, grid.adjacency);
+  std::vector<Clusters> got(targets.size());
+  std::vector<std::thread> threads;
+  for (size_t t = 0; t < 3; ++t)
+    threads.emplace_back([&, t] {
+      for (size_t i = t; i < targets.size(); i += 3) got[i] = threaded.at(targets[i]);
+    });
+  for (std::thread& thread : threads) thread.join();
+  for (size_t i = 0; i < targets.size(); ++i) EXPECT_EQ(got[i].label, alone[i].label) << "target " << targets[i];
 }
 
 }  // namespace

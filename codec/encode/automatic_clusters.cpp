@@ -147,15 +147,12 @@ Tried try_count(const CandidateCost& cost_of, Clusters merged, uint8_t flags, si
   tried.cost = cost_of.cost(*tried.prepared, flags, threads);
   return tried;
 }
-std::vector<Tried> try_counts(const EncodeProblem& problem, const Clusters& morse, const CandidateCost& cost_of,
+std::vector<Tried> try_counts(const ClusterMerges& merges, const CandidateCost& cost_of,
                               const std::vector<size_t>& counts, uint8_t flags, size_t threads, bool report) {
   std::vector<Tried> tried(counts.size());
   const size_t each = std::max<size_t>(1, threads / std::max<size_t>(counts.size(), 1));
   parallel_items(counts.size(), threads, [&](size_t i) {
-    tried[i] = try_count(cost_of,
-                         merge_clusters(morse, counts[i], problem.base_welded.data(), problem.trajectories,
-                                        problem.adjacency),
-                         flags, each, report && i == 0);
+    tried[i] = try_count(cost_of, merges.at(counts[i]), flags, each, report && i == 0);
   });
   return tried;
 }
@@ -168,6 +165,8 @@ std::vector<Tried> try_counts(const EncodeProblem& problem, const Clusters& mors
 // (what it chooses does not change: the costs are taken in order, those past the stop left unused).
 Tried automatic_count(const EncodeProblem& problem, const Clusters& morse, const CandidateCost& cost_of,
                       uint8_t flags, size_t threads, bool report) {
+  // Every count is merged from the segmentation, the smaller ones by more of the same merges.
+  const ClusterMerges merges(morse, problem.base_welded.data(), problem.trajectories, problem.adjacency);
   const size_t largest =
       std::max<size_t>(1, std::min({morse.count, problem.welded / kVerticesPerCluster, kMaxClusters}));
   std::vector<size_t> counts = {largest};  // the counts the search goes down through
@@ -176,8 +175,9 @@ Tried automatic_count(const EncodeProblem& problem, const Clusters& morse, const
   auto cost_at = [&](size_t i) -> Tried& {  // tries counts[i] and the ones after it that the threads allow
     if (i >= tried.size()) {
       const size_t end = std::min({counts.size(), i + std::max<size_t>(threads, 1), i + kCandidatesAtOnce});
-      std::vector<Tried> batch = try_counts(problem, morse, cost_of, {counts.begin() + std::ptrdiff_t(i),
-                                            counts.begin() + std::ptrdiff_t(end)}, flags, threads, report);
+      std::vector<Tried> batch = try_counts(
+          merges, cost_of, {counts.begin() + std::ptrdiff_t(i), counts.begin() + std::ptrdiff_t(end)}, flags, threads,
+          report);
       for (Tried& t : batch) tried.push_back(std::move(t));
     }
     return tried[i];
@@ -201,7 +201,7 @@ Tried automatic_count(const EncodeProblem& problem, const Clusters& morse, const
     if (neighbour == 0 || k == neighbour || k == chosen || k < kMinAutomaticClusters) continue;
     between.push_back(k);
   }
-  for (Tried& candidate : try_counts(problem, morse, cost_of, between, flags, threads, report))
+  for (Tried& candidate : try_counts(merges, cost_of, between, flags, threads, report))
     if (candidate.cost < best.cost) best = std::move(candidate);
   return best;
 }

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <mutex>
 #include <numeric>
+#include <utility>
 
 namespace segmorph {
 namespace {
@@ -180,89 +182,136 @@ Clusters morse_segmentation(const std::vector<double>& mu, const WeldedTopology&
   return clusters_from_levels(mu, topology, adjacency, bands, settings);
 }
 
-Clusters merge_clusters(const Clusters& clusters, size_t target, const float* base, const Trajectories& frames,
-                        const VertexAdjacency& adjacency) {
-  if (clusters.count <= std::max<size_t>(target, 1)) return clusters;
-  const size_t vertex_count = frames.vertex_count, frame_count = frames.frame_count;
-  double origin[3] = {0, 0, 0};
-  for (size_t v = 0; v < vertex_count; ++v)
-    for (int c = 0; c < 3; ++c) origin[c] += base[v * 3 + size_t(c)] / double(vertex_count);
+// The state of the merges so far: each cluster's statistics (of the merged set it stands for while alive), which
+// alive clusters touch, the cost of merging each alive pair, and the merges made, in order.
+struct ClusterMerges::Merging {
+  const float* base;
+  const Trajectories& frames;
+  const VertexAdjacency& adjacency;
+  std::mutex mutex;
+  bool started = false;
+  size_t count = 0;  // alive clusters
+  std::vector<FitStatistics> statistics;
+  std::vector<double> residual;
+  std::vector<std::vector<bool>> touching;
+  std::vector<bool> alive;
+  std::vector<std::vector<double>> cost;
+  std::vector<std::pair<uint32_t, uint32_t>> merges;  // (a, b): b merged into a
 
-  std::vector<FitStatistics> statistics(clusters.count);
-  for (FitStatistics& s : statistics) {
-    s.moments.assign(frame_count, Eigen::Matrix<double, 4, 3>::Zero());
-    s.energy.assign(frame_count, 0.0);
-  }
-  for (size_t v = 0; v < vertex_count; ++v) {
-    FitStatistics& s = statistics[clusters.label[v]];
-    const Eigen::Vector4d x(base[v * 3] - origin[0], base[v * 3 + 1] - origin[1], base[v * 3 + 2] - origin[2], 1.0);
-    s.gram += x * x.transpose();
-    ++s.size;
-    for (size_t f = 0; f < frame_count; ++f) {
-      const float* p = frames.frame(f) + v * 3;
-      const Eigen::RowVector3d y(p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]);
-      s.moments[f] += x * y;
-      s.energy[f] += y.squaredNorm();
-    }
-  }
-  std::vector<double> residual(clusters.count);
-  for (size_t k = 0; k < clusters.count; ++k) residual[k] = statistics[k].residual();
+  Merging(const float* base_, const Trajectories& frames_, const VertexAdjacency& adjacency_)
+      : base(base_), frames(frames_), adjacency(adjacency_) {}
 
-  // Candidate pairs: clusters that share an edge; clusters that share none with anyone (small separate
-  // components) may join any cluster.
-  std::vector<std::vector<bool>> touching(clusters.count, std::vector<bool>(clusters.count, false));
-  for (size_t v = 0; v < vertex_count; ++v)
-    for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i) {
-      const uint32_t a = clusters.label[v], b = clusters.label[adjacency.neighbour[i]];
-      if (a != b) touching[a][b] = touching[b][a] = true;
-    }
-  std::vector<bool> alive(clusters.count, true);
-  std::vector<uint32_t> into(clusters.count);
-  std::iota(into.begin(), into.end(), 0u);
-  auto isolated = [&](size_t a) {
+  bool isolated(size_t a) const {
     return std::none_of(touching[a].begin(), touching[a].end(), [](bool t) { return t; });
-  };
-  // Cost of merging a and b (the increase of the residual), cached; NaN where they may not merge.
-  auto merge_cost = [&](size_t a, size_t b) -> double {
+  }
+  // Cost of merging a and b (the increase of the residual); NaN where they may not merge.
+  double merge_cost(size_t a, size_t b) const {
     if (!touching[a][b] && !isolated(a) && !isolated(b)) return NAN;
     FitStatistics merged = statistics[a];
     merged.add(statistics[b]);
     return merged.residual() - residual[a] - residual[b];
-  };
-  std::vector<std::vector<double>> cost(clusters.count, std::vector<double>(clusters.count, NAN));
-  for (size_t a = 0; a < clusters.count; ++a)
-    for (size_t b = a + 1; b < clusters.count; ++b) cost[a][b] = merge_cost(a, b);
-
-  for (size_t count = clusters.count; count > target; --count) {
-    double best_cost = INFINITY;
-    size_t best_a = 0, best_b = 0;
-    for (size_t a = 0; a < clusters.count; ++a)
-      for (size_t b = a + 1; b < clusters.count && alive[a]; ++b)
-        if (alive[b] && cost[a][b] < best_cost) best_cost = cost[a][b], best_a = a, best_b = b;
-    if (!std::isfinite(best_cost)) break;
-    statistics[best_a].add(statistics[best_b]);
-    residual[best_a] = statistics[best_a].residual();
-    alive[best_b] = false;
-    into[best_b] = uint32_t(best_a);
-    for (size_t k = 0; k < clusters.count; ++k) {
-      touching[best_a][k] = touching[best_a][k] || touching[best_b][k];
-      touching[k][best_a] = touching[best_a][k];
-      touching[best_b][k] = touching[k][best_b] = false;
-    }
-    touching[best_a][best_a] = false;
-    for (size_t k = 0; k < clusters.count; ++k)
-      if (alive[k] && k != best_a) {
-        const double c = merge_cost(std::min(k, best_a), std::max(k, best_a));
-        cost[std::min(k, best_a)][std::max(k, best_a)] = c;
-      }
   }
-  std::vector<uint32_t> label(vertex_count);
-  for (size_t v = 0; v < vertex_count; ++v) {
-    uint32_t k = clusters.label[v];
+
+  void start(const Clusters& clusters) {
+    started = true;
+    count = clusters.count;
+    const size_t vertex_count = frames.vertex_count, frame_count = frames.frame_count;
+    double origin[3] = {0, 0, 0};
+    for (size_t v = 0; v < vertex_count; ++v)
+      for (int c = 0; c < 3; ++c) origin[c] += base[v * 3 + size_t(c)] / double(vertex_count);
+    statistics.resize(clusters.count);
+    for (FitStatistics& s : statistics) {
+      s.moments.assign(frame_count, Eigen::Matrix<double, 4, 3>::Zero());
+      s.energy.assign(frame_count, 0.0);
+    }
+    for (size_t v = 0; v < vertex_count; ++v) {
+      FitStatistics& s = statistics[clusters.label[v]];
+      const Eigen::Vector4d x(base[v * 3] - origin[0], base[v * 3 + 1] - origin[1], base[v * 3 + 2] - origin[2], 1.0);
+      s.gram += x * x.transpose();
+      ++s.size;
+      for (size_t f = 0; f < frame_count; ++f) {
+        const float* p = frames.frame(f) + v * 3;
+        const Eigen::RowVector3d y(p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]);
+        s.moments[f] += x * y;
+        s.energy[f] += y.squaredNorm();
+      }
+    }
+    residual.resize(clusters.count);
+    for (size_t k = 0; k < clusters.count; ++k) residual[k] = statistics[k].residual();
+
+    // Candidate pairs: clusters that share an edge; clusters that share none with anyone (small separate
+    // components) may join any cluster.
+    touching.assign(clusters.count, std::vector<bool>(clusters.count, false));
+    for (size_t v = 0; v < vertex_count; ++v)
+      for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i) {
+        const uint32_t a = clusters.label[v], b = clusters.label[adjacency.neighbour[i]];
+        if (a != b) touching[a][b] = touching[b][a] = true;
+      }
+    alive.assign(clusters.count, true);
+    cost.assign(clusters.count, std::vector<double>(clusters.count, NAN));
+    for (size_t a = 0; a < clusters.count; ++a)
+      for (size_t b = a + 1; b < clusters.count; ++b) cost[a][b] = merge_cost(a, b);
+  }
+
+  // Merges while more than `target` clusters are alive and some pair may merge.
+  void merge_down_to(size_t target) {
+    const size_t n = statistics.size();
+    for (; count > target; --count) {
+      double best_cost = INFINITY;
+      size_t best_a = 0, best_b = 0;
+      for (size_t a = 0; a < n; ++a)
+        for (size_t b = a + 1; b < n && alive[a]; ++b)
+          if (alive[b] && cost[a][b] < best_cost) best_cost = cost[a][b], best_a = a, best_b = b;
+      if (!std::isfinite(best_cost)) break;
+      statistics[best_a].add(statistics[best_b]);
+      residual[best_a] = statistics[best_a].residual();
+      alive[best_b] = false;
+      merges.emplace_back(uint32_t(best_a), uint32_t(best_b));
+      for (size_t k = 0; k < n; ++k) {
+        touching[best_a][k] = touching[best_a][k] || touching[best_b][k];
+        touching[k][best_a] = touching[best_a][k];
+        touching[best_b][k] = touching[k][best_b] = false;
+      }
+      touching[best_a][best_a] = false;
+      for (size_t k = 0; k < n; ++k)
+        if (alive[k] && k != best_a) {
+          const size_t a = std::min(k, best_a), b = std::max(k, best_a);
+          cost[a][b] = merge_cost(a, b);
+        }
+    }
+  }
+};
+
+ClusterMerges::ClusterMerges(const Clusters& clusters, const float* base, const Trajectories& frames,
+                             const VertexAdjacency& adjacency)
+    : clusters_(clusters), merging_(std::make_unique<Merging>(base, frames, adjacency)) {}
+
+ClusterMerges::~ClusterMerges() = default;
+
+Clusters ClusterMerges::at(size_t target) const {
+  if (clusters_.count <= std::max<size_t>(target, 1)) return clusters_;
+  std::vector<uint32_t> into(clusters_.count);
+  std::iota(into.begin(), into.end(), 0u);
+  {
+    const std::lock_guard<std::mutex> lock(merging_->mutex);
+    if (!merging_->started) merging_->start(clusters_);
+    merging_->merge_down_to(target);
+    // The merges down to `target`: those made first (the merges stop early when no pair may merge).
+    const size_t made = std::min(merging_->merges.size(), clusters_.count - target);
+    for (size_t i = 0; i < made; ++i) into[merging_->merges[i].second] = merging_->merges[i].first;
+  }
+  std::vector<uint32_t> label(clusters_.label.size());
+  for (size_t v = 0; v < label.size(); ++v) {
+    uint32_t k = clusters_.label[v];
     while (into[k] != k) k = into[k];
     label[v] = k;
   }
   return compact(label);
+}
+
+Clusters merge_clusters(const Clusters& clusters, size_t target, const float* base, const Trajectories& frames,
+                        const VertexAdjacency& adjacency) {
+  return ClusterMerges(clusters, base, frames, adjacency).at(target);
 }
 
 }  // namespace segmorph

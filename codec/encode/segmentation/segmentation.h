@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "common/topology.h"
@@ -39,6 +40,26 @@ Clusters clusters_from_levels(const std::vector<double>& mu, const WeldedTopolog
 // `target` clusters remain (no-op when there are already that few).
 Clusters merge_clusters(const Clusters& clusters, size_t target, const float* base, const Trajectories& frames,
                         const VertexAdjacency& adjacency);
+
+// merge_clusters to any number of targets from the same clusters, sharing the work: the merges are made once, in
+// order, as far as the smallest target asked so far (the merges down to a target are those down to any larger one,
+// then more), and the frames are read once. `at(target)` is merge_clusters(clusters, target, ...), and may be called
+// from several threads at once. The arguments must outlive the object.
+class ClusterMerges {
+ public:
+  ClusterMerges(const Clusters& clusters, const float* base, const Trajectories& frames,
+                const VertexAdjacency& adjacency);
+  ~ClusterMerges();
+  ClusterMerges(const ClusterMerges&) = delete;
+  ClusterMerges& operator=(const ClusterMerges&) = delete;
+
+  Clusters at(size_t target) const;
+
+ private:
+  struct Merging;
+  const Clusters& clusters_;
+  std::unique_ptr<Merging> merging_;
+};
 
 // Labels renumbered to 0..K−1 in order of first appearance: clusters no vertex has disappear. Labels must be below
 // label.size().
