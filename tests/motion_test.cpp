@@ -88,6 +88,40 @@ TEST(Motion, MotionErrorGrowsWhenAClusterMixesTwoMotions) {
   EXPECT_GT(wrong, 1e-4);
 }
 
+TEST(Motion, RefitGivesTheWholeFitsNumbers) {
+  std::mt19937 random(8);
+  const std::vector<float> base = random_base(300, random);
+  Clusters before;
+  before.count = 6;
+  for (size_t v = 0; v < 300; ++v) before.label.push_back(uint32_t(v % 6));
+  std::vector<std::vector<std::array<double, 12>>> maps(7);
+  for (auto& frame : maps)
+    for (int k = 0; k < 6; ++k) frame.push_back(random_map(random));
+  Trajectories frames = move_by(base, before, maps);
+  std::normal_distribution<float> noise(0, 0.01f);
+  for (float& x : frames.positions) x += noise(random);  // no fit is exact
+  const AffineMotion previous = fit_affine_motion(base.data(), frames, before);
+  // Renumbered; vertex 1 moves from cluster 1 to 2 (1 loses one, 2 gains one); vertices 0 and 3 trade places
+  // (clusters 0 and 3 keep their sizes, not their vertices); half of cluster 4 becomes a cluster of its own; 5 stays.
+  Clusters after;
+  after.count = 7;
+  for (size_t v = 0; v < 300; ++v) after.label.push_back(uint32_t((v % 6 + 2) % 6));
+  after.label[1] = 4, after.label[0] = 5, after.label[3] = 2;
+  for (size_t v = 4; v < 300; v += 12) after.label[v] = 6;
+  for (size_t threads : {1, 3}) {
+    const AffineMotion whole = fit_affine_motion(base.data(), frames, after, threads);
+    const AffineMotion refit = refit_affine_motion(base.data(), frames, after, before, previous, threads);
+    ASSERT_EQ(refit.cluster_count, 7u);
+    ASSERT_EQ(refit.frame_count, 7u);
+    EXPECT_EQ(0, std::memcmp(refit.centroid.data(), whole.centroid.data(), whole.centroid.size() * sizeof(double)));
+    ASSERT_EQ(refit.transforms.size(), whole.transforms.size());
+    for (size_t f = 0; f < 7; ++f)
+      for (size_t k = 0; k < 7; ++k)
+        EXPECT_EQ(0, std::memcmp(refit.transform(f, k), whole.transform(f, k), 12 * sizeof(double)))
+            << "frame " << f << " cluster " << k;
+  }
+}
+
 // Found by the fuzz seed generator (tests/fuzz): a vertex no triangle uses became a cluster of its own, whose
 // G + ρI was too small to invert (ρ³ underflowed); its motion came out NaN, and a bpvf encode converted NaN to int.
 TEST(Motion, AClusterOfOneVertexGetsFiniteMotion) {

@@ -20,8 +20,14 @@ inline void apply(const double* transform, const double* c, const float* x, doub
 
 }  // namespace
 
-AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
-                               size_t threads) {
+namespace {
+
+constexpr uint32_t kFitted = UINT32_MAX;
+
+// fit_affine_motion, with each cluster k whose `source[k]` is not kFitted taking over cluster source[k]'s transforms
+// of `previous` instead of being fitted.
+AffineMotion fit_clusters(const float* base, const Trajectories& frames, const Clusters& clusters, size_t threads,
+                          const std::vector<uint32_t>& source, const AffineMotion* previous) {
   const size_t vertex_count = frames.vertex_count, cluster_count = clusters.count;
   assert(clusters.label.size() == vertex_count);
   AffineMotion motion;
@@ -75,6 +81,7 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
     for (size_t f = begin; f < end; ++f) {
       const float* frame = frames.frame(f);
       for (size_t k = 0; k < cluster_count; ++k) {
+        if (source[k] != kFitted) continue;
         // Σ y and Σ y xᵀ in scalars, which stay in registers (an Eigen matrix here did not).
         double s0 = 0, s1 = 0, s2 = 0, m00 = 0, m01 = 0, m02 = 0, m10 = 0, m11 = 0, m12 = 0, m20 = 0, m21 = 0, m22 = 0;
         for (uint32_t i = member_offset[k]; i < member_offset[k + 1]; ++i) {
@@ -92,6 +99,12 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
         moments[k] = moment - mean[k] * centred_sum[k].transpose();
       }
       for (size_t k = 0; k < cluster_count; ++k) {
+        double* transform = motion.transform(f, k);
+        if (source[k] != kFitted) {
+          const double* taken = previous->transform(f, source[k]);
+          std::copy(taken, taken + 12, transform);
+          continue;
+        }
         Eigen::JacobiSVD<Eigen::Matrix3d> svd(moments[k], Eigen::ComputeFullU | Eigen::ComputeFullV);
         Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
         if (rotation.determinant() < 0) {
@@ -100,7 +113,6 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
           rotation = u * svd.matrixV().transpose();
         }
         const Eigen::Matrix3d linear = (moments[k] + rho[k] * rotation) * inverse[k];
-        double* transform = motion.transform(f, k);
         for (int r = 0; r < 3; ++r) {
           for (int c = 0; c < 3; ++c) transform[r * 4 + c] = linear(r, c);
           transform[r * 4 + 3] = mean[k](r);
@@ -109,6 +121,34 @@ AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, co
     }
   });
   return motion;
+}
+
+}  // namespace
+
+AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
+                               size_t threads) {
+  return fit_clusters(base, frames, clusters, threads, std::vector<uint32_t>(clusters.count, kFitted), nullptr);
+}
+
+AffineMotion refit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
+                                 const Clusters& previous_clusters, const AffineMotion& previous, size_t threads) {
+  assert(previous_clusters.label.size() == clusters.label.size());
+  assert(previous.cluster_count == previous_clusters.count && previous.frame_count == frames.frame_count);
+  // Cluster k has the vertices of previous cluster j when all of them were in j and j had as many.
+  std::vector<uint32_t> source(clusters.count, kFitted);
+  std::vector<char> one_source(clusters.count, 1);
+  std::vector<size_t> size(clusters.count, 0), previous_size(previous_clusters.count, 0);
+  for (size_t v = 0; v < clusters.label.size(); ++v) {
+    const uint32_t k = clusters.label[v], j = previous_clusters.label[v];
+    if (source[k] == kFitted)
+      source[k] = j;
+    else if (source[k] != j)
+      one_source[k] = 0;
+    ++size[k], ++previous_size[j];
+  }
+  for (size_t k = 0; k < clusters.count; ++k)
+    if (source[k] != kFitted && (!one_source[k] || previous_size[source[k]] != size[k])) source[k] = kFitted;
+  return fit_clusters(base, frames, clusters, threads, source, &previous);
 }
 
 double motion_compensation_error(const float* base, const Trajectories& frames, const Clusters& clusters,

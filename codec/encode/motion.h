@@ -26,6 +26,11 @@ struct Trajectories {
 AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
                                size_t threads = 1);
 
+// fit_affine_motion of `clusters`, where `previous` is that of `previous_clusters` (of the same vertices): a cluster
+// with the vertices of a previous one takes its fit over (the same numbers), and only the others are fitted.
+AffineMotion refit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
+                                 const Clusters& previous_clusters, const AffineMotion& previous, size_t threads = 1);
+
 // E(Π) of the paper's Table 2: mean squared distance between each vertex and its cluster's affine image of
 // its base position, over all vertices and frames, divided by the squared bounding-box diagonal of the base.
 double motion_compensation_error(const float* base, const Trajectories& frames, const Clusters& clusters,

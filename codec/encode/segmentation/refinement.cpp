@@ -270,10 +270,12 @@ Clusters refine_by_motion(const Clusters& clusters, const float* base, const Tra
   int iterations = 0;
   AffineMotion motion;
   bool have_fit = false;
-  std::vector<uint32_t> fitted;  // the labels `motion` is the fit of
+  Clusters fitted;  // the clusters `motion` is the fit of
   for (; iterations < max_iterations; ++iterations) {
-    motion = fit_affine_motion(base, frames, refined, threads);
-    fitted = refined.label, have_fit = true;
+    // Each round moves few vertices: the clusters it left alone keep their fit.
+    motion = have_fit ? refit_affine_motion(base, frames, refined, fitted, motion, threads)
+                      : fit_affine_motion(base, frames, refined, threads);
+    fitted = refined, have_fit = true;
     std::vector<uint32_t> label = refined.label;
     // Each vertex's move depends on the previous labels only: the vertices are split over threads.
     parallel_ranges(vertex_count, thread_count(threads), [&](size_t begin, size_t end) {
@@ -316,9 +318,9 @@ Clusters refine_by_motion(const Clusters& clusters, const float* base, const Tra
   }
   if (iterations_out) *iterations_out = iterations;
   if (motion_out)
-    *motion_out = have_fit && refined.label == fitted && motion.cluster_count == refined.count
-                      ? std::move(motion)
-                      : fit_affine_motion(base, frames, refined, threads);
+    *motion_out = !have_fit                        ? fit_affine_motion(base, frames, refined, threads)
+                  : refined.label == fitted.label ? std::move(motion)
+                                                  : refit_affine_motion(base, frames, refined, fitted, motion, threads);
   return refined;
 }
 
