@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <random>
 #include <set>
 #include <thread>
 #include <vector>
@@ -61,6 +64,92 @@ TEST(Segmentation, AHoleSplitsTheBandsItCrosses) {
   EXPECT_EQ(at(0, 0), at(0, 30));
   std::set<uint32_t> distinct(clusters.label.begin(), clusters.label.end());
   EXPECT_EQ(distinct.size(), clusters.count);
+}
+
+// clusters_from_levels as first written (the smallest piece found again by a pass over every vertex after each
+// join), the reference for the faster one.
+Clusters pieces_joined_by_passes(const std::vector<double>& mu, const WeldedTopology& topology,
+                                 const VertexAdjacency& adjacency, const MorseBands& bands, size_t min_size) {
+  const size_t count = topology.welded_count();
+  std::vector<uint32_t> band(count), label(count);
+  for (size_t w = 0; w < count; ++w) {
+    const std::vector<double>& levels = bands.levels[topology.component[w]];
+    band[w] = uint32_t(std::upper_bound(levels.begin(), levels.end(), mu[w]) - levels.begin());
+  }
+  // Each piece labelled by its lowest vertex: a search from every vertex not yet labelled, in order.
+  std::vector<char> seen(count, 0);
+  for (size_t w = 0; w < count; ++w) {
+    if (seen[w]) continue;
+    std::vector<uint32_t> stack = {uint32_t(w)};
+    seen[w] = 1;
+    while (!stack.empty()) {
+      const uint32_t v = stack.back();
+      stack.pop_back();
+      label[v] = uint32_t(w);
+      for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i) {
+        const uint32_t u = adjacency.neighbour[i];
+        if (!seen[u] && band[u] == band[v]) seen[u] = 1, stack.push_back(u);
+      }
+    }
+  }
+  for (bool changed = true; changed;) {
+    changed = false;
+    std::vector<size_t> size(count, 0);
+    for (size_t w = 0; w < count; ++w) ++size[label[w]];
+    std::vector<uint32_t> order;
+    for (size_t w = 0; w < count; ++w)
+      if (label[w] == w && size[w] < min_size) order.push_back(uint32_t(w));
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t a, uint32_t b) { return size[a] != size[b] ? size[a] < size[b] : a < b; });
+    for (uint32_t piece : order) {
+      std::map<uint32_t, size_t> shared;
+      for (size_t w = 0; w < count; ++w)
+        if (label[w] == piece)
+          for (uint32_t i = adjacency.offset[w]; i < adjacency.offset[w + 1]; ++i)
+            if (label[adjacency.neighbour[i]] != piece) ++shared[label[adjacency.neighbour[i]]];
+      if (shared.empty()) continue;
+      uint32_t best = shared.begin()->first;
+      for (const auto& [other, edges] : shared)
+        if (edges > shared[best]) best = other;  // ties: the lowest id, met first
+      for (size_t w = 0; w < count; ++w)
+        if (label[w] == piece) label[w] = best;
+      changed = true;
+      break;
+    }
+  }
+  return compact(label);
+}
+
+TEST(Segmentation, SmallPiecesJoinAsTheOneByOnePassesJoinThem) {
+  // Grids with holes (some cut off corners and strips: components of their own, some tiny) and a rough μ cut at
+  // many levels: many small pieces, joined in chains.
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<double> unit(0, 1);
+    std::vector<char> holes(40 * 40);
+    for (char& hole : holes) hole = unit(random) < 0.12;
+    const Grid grid = make_grid(40, [&](int i, int j) { return holes[size_t(j * 40 + i)] != 0; });
+    const size_t count = grid.topology.welded_count();
+    std::vector<double> mu(count);
+    for (size_t w = 0; w < count; ++w)
+      mu[w] = 0.05 * grid.base[w * 3] + std::sin(0.7 * grid.base[w * 3 + 1]) + 0.4 * unit(random);
+    MorseBands bands;
+    bands.levels.resize(grid.topology.component_count);
+    for (std::vector<double>& levels : bands.levels) {
+      for (int j = 0; j < 30; ++j) levels.push_back(-1.0 + 4.5 * unit(random));
+      std::sort(levels.begin(), levels.end());
+    }
+    MorseSettings settings;
+    settings.min_cluster_size = 5 + int(seed) * 4;
+    settings.min_cluster_share = 0;
+    const Clusters fast = clusters_from_levels(mu, grid.topology, grid.adjacency, bands, settings);
+    const Clusters reference =
+        pieces_joined_by_passes(mu, grid.topology, grid.adjacency, bands, size_t(settings.min_cluster_size));
+    EXPECT_GT(grid.topology.component_count, 1u) << "seed " << seed;
+    EXPECT_GT(reference.count, 10u) << "seed " << seed;
+    EXPECT_EQ(fast.count, reference.count) << "seed " << seed;
+    EXPECT_EQ(fast.label, reference.label) << "seed " << seed;
+  }
 }
 
 TEST(Segmentation, MergeJoinsClustersThatMoveAlikeFirst) {

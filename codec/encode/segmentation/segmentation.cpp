@@ -6,6 +6,7 @@
 #include <cmath>
 #include <mutex>
 #include <numeric>
+#include <set>
 #include <utility>
 
 namespace segmorph {
@@ -102,41 +103,43 @@ Clusters clusters_from_levels(const std::vector<double>& mu, const WeldedTopolog
   std::vector<uint32_t> label(vertex_count);
   for (size_t w = 0; w < vertex_count; ++w) label[w] = pieces.find(uint32_t(w));
 
-  // Small pieces join the neighbouring piece they share the most edges with, smallest first.
+  // Small pieces join the neighbouring piece they share the most edges with, smallest first (ties: the lowest id, a
+  // piece's id being its label, the lowest vertex it started from); each join changes the sizes, and the smallest is
+  // then found again. A piece without neighbours (a small component of its own) is left to merge_clusters: no join
+  // can reach it (the adjacency is symmetric).
   const size_t min_size =
       std::max(size_t(settings.min_cluster_size), size_t(std::ceil(settings.min_cluster_share * double(vertex_count))));
-  for (bool changed = true; changed;) {
-    changed = false;
-    std::vector<size_t> size(vertex_count, 0);
-    for (size_t w = 0; w < vertex_count; ++w) ++size[label[w]];
-    std::vector<uint32_t> order;
-    for (size_t w = 0; w < vertex_count; ++w)
-      if (label[w] == w && size[w] < min_size) order.push_back(uint32_t(w));
-    std::sort(order.begin(), order.end(),
-              [&](uint32_t a, uint32_t b) { return size[a] != size[b] ? size[a] < size[b] : a < b; });
-    for (uint32_t piece : order) {
-      std::vector<std::pair<uint32_t, size_t>> shared;  // neighbouring piece, shared edges
-      for (size_t w = 0; w < vertex_count; ++w) {
-        if (label[w] != piece) continue;
-        for (uint32_t i = adjacency.offset[w]; i < adjacency.offset[w + 1]; ++i) {
-          const uint32_t other = label[adjacency.neighbour[i]];
-          if (other == piece) continue;
-          auto it = std::find_if(shared.begin(), shared.end(), [&](const auto& s) { return s.first == other; });
-          if (it == shared.end())
-            shared.push_back({other, 1});
-          else
-            ++it->second;
-        }
+  std::vector<size_t> size(vertex_count, 0);
+  std::vector<std::vector<uint32_t>> members(vertex_count);
+  for (size_t w = 0; w < vertex_count; ++w) ++size[label[w]], members[label[w]].push_back(uint32_t(w));
+  std::set<std::pair<size_t, uint32_t>> small;  // (size, id) of the small pieces not yet joined or passed over
+  for (size_t w = 0; w < vertex_count; ++w)
+    if (label[w] == w && size[w] < min_size) small.insert({size[w], uint32_t(w)});
+  std::vector<std::pair<uint32_t, size_t>> shared;  // neighbouring piece, shared edges
+  while (!small.empty()) {
+    const uint32_t piece = small.begin()->second;
+    small.erase(small.begin());
+    shared.clear();
+    for (uint32_t w : members[piece])
+      for (uint32_t i = adjacency.offset[w]; i < adjacency.offset[w + 1]; ++i) {
+        const uint32_t other = label[adjacency.neighbour[i]];
+        if (other == piece) continue;
+        auto it = std::find_if(shared.begin(), shared.end(), [&](const auto& s) { return s.first == other; });
+        if (it == shared.end())
+          shared.push_back({other, 1});
+        else
+          ++it->second;
       }
-      if (shared.empty()) continue;  // a small component of its own: left to merge_clusters
-      const auto best = std::max_element(shared.begin(), shared.end(), [](const auto& a, const auto& b) {
-        return a.second != b.second ? a.second < b.second : a.first > b.first;
-      });
-      for (size_t w = 0; w < vertex_count; ++w)
-        if (label[w] == piece) label[w] = best->first;
-      changed = true;
-      break;  // sizes changed: recount
-    }
+    if (shared.empty()) continue;
+    const uint32_t into = std::max_element(shared.begin(), shared.end(), [](const auto& a, const auto& b) {
+                            return a.second != b.second ? a.second < b.second : a.first > b.first;
+                          })->first;
+    for (uint32_t w : members[piece]) label[w] = into;
+    small.erase({size[into], into});
+    size[into] += size[piece];
+    members[into].insert(members[into].end(), members[piece].begin(), members[piece].end());
+    members[piece] = std::vector<uint32_t>();
+    if (size[into] < min_size) small.insert({size[into], into});
   }
   return compact(label);
 }
