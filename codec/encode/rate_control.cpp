@@ -421,29 +421,42 @@ void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vect
     wide.resize(p_.frames_total * row);
   else
     narrow.resize(p_.frames_total * row);
-  std::vector<double> predicted(row);
-  std::vector<float> decoded(row);
+  std::vector<double> predicted(2 * row);
+  std::vector<float> decoded(2 * row);
   const VertexGather to_vertices(p_.topology.welded_index);
   double inverse_step[3];
   for (int axis = 0; axis < 3; ++axis) inverse_step[axis] = 1.0 / double(content_.residual_step[axis]);
+  // Frame `frame`'s symbols from its targets, and where its reconstruction goes (s: 0 or 1, its place in a pair).
+  auto symbol = [&](size_t frame) {
+    const size_t offset = frame * row;
+    return [&, offset](size_t i, double p, double r) -> int64_t {
+      const float x = targets[offset + i];
+      if (lossless) return wide[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
+      const int64_t k = quantizer_index((double(x) - p - r) * inverse_step[i % 3]);
+      return narrow[offset + i] = int32_t(std::clamp<int64_t>(k, INT32_MIN + 1, INT32_MAX));
+    };
+  };
+  auto output = [&](size_t s) {
+    float* to = &decoded[s * row];
+    return [to](size_t i, float x) { to[i] = x; };
+  };
+  // Two frames of a clip at a time where two are left, as the decoder reconstructs them (the same values).
   ResidualReconstructor reconstructor(content_, p_.traversal);
   size_t frame = 0;
   for (size_t c = 0; c < content_.clip_frames.size(); ++c) {
     reconstructor.start_clip();
-    for (uint32_t f = 0; f < content_.clip_frames[c]; ++f, ++frame) {
-      const size_t offset = frame * row;
-      predictions_->predict(frame, predicted.data());
-      reconstructor.frame(
-          frame, predicted.data(),
-          [&](size_t i, double p, double r) -> int64_t {
-            const float x = targets[offset + i];
-            if (lossless) return wide[offset + i] = ordered_bits(x) - ordered_bits(float(p + r));
-            const int64_t k = quantizer_index((double(x) - p - r) * inverse_step[i % 3]);
-            return narrow[offset + i] = int32_t(std::clamp<int64_t>(k, INT32_MIN + 1, INT32_MAX));
-          },
-          [&](size_t i, float x) { decoded[i] = x; });
-      to_vertices.gather(decoded.data(), restored[c].frame(f));
-      report_progress(settings_, "coding the residuals", double(frame + 1) / double(p_.frames_total));
+    for (uint32_t f = 0; f < content_.clip_frames[c];) {
+      const uint32_t count = content_.clip_frames[c] - f >= 2 ? 2 : 1;
+      for (uint32_t s = 0; s < count; ++s) predictions_->predict(frame + s, &predicted[s * row]);
+      if (count == 2)
+        reconstructor.two_frames(frame, &predicted[0], symbol(frame), output(0), &predicted[row], symbol(frame + 1),
+                                 output(1));
+      else
+        reconstructor.frame(frame, &predicted[0], symbol(frame), output(0));
+      for (uint32_t s = 0; s < count; ++s, ++f, ++frame) {
+        to_vertices.gather(&decoded[s * row], restored[c].frame(f));
+        report_progress(settings_, "coding the residuals", double(frame + 1) / double(p_.frames_total));
+      }
     }
   }
   report_progress(settings_, "writing the stream");
