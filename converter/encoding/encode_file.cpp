@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <vector>
 
 #include "bake/bake.h"
+#include "common/parallel.h"
 #include "encode/metrics.h"
 #include "encode/rate_target.h"
 #include "encoding/compress_primitives.h"
@@ -248,27 +250,34 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
     primitive.error = primitive_error(file.model, compared);
     report.primitives.push_back(primitive);
   }
+  // The rigid meshes' primitives, each measured on the first node that uses its mesh (moving_meshes takes only meshes
+  // that nodes use) and named by its output mesh and primitive: compared on the threads, reported in order.
+  std::vector<PrimitiveComparison> rigid;
   for (int mesh : encoded.rigid_meshes)
     for (size_t p = 0; p < encoded.model.meshes[size_t(mesh)].primitives.size(); ++p) {
-      // Measured on the first node that uses the mesh (moving_meshes takes only meshes that nodes use), and named
-      // by its output mesh and primitive.
       PrimitiveComparison compared;
       compared.mesh = mesh, compared.primitive = int(p);
       for (size_t n = 0; n < encoded.model.nodes.size() && compared.node < 0; ++n)
         if (encoded.model.nodes[n].mesh == mesh) compared.node = int(n);
-      status = compare_rigid_primitive(file.model, file.scene, decoded.model, decoded.scene, compared.node, int(p),
-                                       compared.metrics);
-      if (!status.ok())
-        return Status(StatusCode::internal, "measuring the encode's rigid mesh " + std::to_string(mesh) +
-                                                " against the input: " + status.message());
-      EncodedPrimitive primitive;
-      primitive.mode = PrimitiveMode::rigid;
-      primitive.output_mesh = mesh;
-      primitive.output_primitive = int(p);
-      primitive.bytes = coded_bytes(encoded.model, mesh, int(p));
-      primitive.error = primitive_error(encoded.model, compared);
-      report.primitives.push_back(primitive);
+      rigid.push_back(compared);
     }
+  std::vector<Status> rigid_status(rigid.size());
+  parallel_items(rigid.size(), thread_count(threads), [&](size_t i) {
+    rigid_status[i] = compare_rigid_primitive(file.model, file.scene, decoded.model, decoded.scene, rigid[i].node,
+                                              rigid[i].primitive, rigid[i].metrics);
+  });
+  for (size_t i = 0; i < rigid.size(); ++i) {
+    if (!rigid_status[i].ok())
+      return Status(StatusCode::internal, "measuring the encode's rigid mesh " + std::to_string(rigid[i].mesh) +
+                                              " against the input: " + rigid_status[i].message());
+    EncodedPrimitive primitive;
+    primitive.mode = PrimitiveMode::rigid;
+    primitive.output_mesh = rigid[i].mesh;
+    primitive.output_primitive = rigid[i].primitive;
+    primitive.bytes = coded_bytes(encoded.model, rigid[i].mesh, rigid[i].primitive);
+    primitive.error = primitive_error(encoded.model, rigid[i]);
+    report.primitives.push_back(primitive);
+  }
   report.kg_percent = comparison.worst.kg_percent;
   report.rmse_over_diagonal = comparison.worst.rmse_over_diagonal;
   report.max_error_over_diagonal = comparison.worst.max_error_over_diagonal;
