@@ -3,8 +3,44 @@
 // none is recomputed with the code under test.
 #include "sampling_fixtures.h"
 
+#include <cstring>
+
 namespace segmorph {
 namespace {
+
+// ----- Transforms ------------------------------------------------------------------------------------------
+
+TEST(SamplingTransforms, OneNodesTransformIsTheWholeEvaluationsExactly) {
+  // A chain of three (joint0 → joint1 → a child with a matrix), each level animated, and a node beside them: the
+  // transform of one node computed alone is the same numbers as in the whole graph's, between keys and past them.
+  GltfBuilder gltf;
+  const TwoJointSkin skin = add_two_joint_skin(gltf);
+  const int child = gltf.add_node({0.5f, 0.25f, 0});
+  gltf.add_child(skin.joint1, child);
+  gltf.model.nodes[size_t(child)].translation.clear();
+  gltf.model.nodes[size_t(child)].matrix = {0.9, 0.1, 0, 0, -0.1, 0.9, 0.2, 0, 0, -0.2, 1.1, 0, 0.3, 0.7, -0.4, 1};
+  const int beside = gltf.add_node({2, 0, 0});
+  const int animation = gltf.add_animation();
+  gltf.add_channel(animation, skin.joint0, "rotation", {0, 1, 2}, {0, 0, 0, 1, 0, 0.38f, 0, 0.92f, 0.2f, 0, 0, 0.98f});
+  gltf.add_channel(animation, skin.joint1, "translation", {0, 0.7f, 2}, {0, 1, 0, 0.3f, 1.2f, 0, 0, 0.8f, 0.5f});
+  gltf.add_channel(animation, skin.joint1, "scale", {0, 2}, {1, 1, 1, 1.5f, 0.5f, 1});
+  gltf.add_channel(animation, beside, "translation", {0, 2}, {2, 0, 0, 3, 1, 0});
+  Scene scene;
+  SampledNode sampled;
+  ASSERT_TRUE(IsOk(analyze_and_sample(gltf.model, {}, scene, sampled)));
+  ASSERT_EQ(scene.clips.size(), 1u);
+  std::vector<Eigen::Matrix4d> global;
+  const std::vector<const Clip*> clips = {nullptr, &scene.clips[0]};
+  for (const Clip* clip : clips)
+    for (double t : {0.0, 0.35, 1.0, 1.61, 2.0, 3.5}) {
+      evaluate_global_transforms(gltf.model, scene.graph, clip, t, global);
+      for (int node = 0; node < int(gltf.model.nodes.size()); ++node) {
+        const Eigen::Matrix4d alone = evaluate_global_transform(gltf.model, scene.graph, clip, t, node);
+        EXPECT_EQ(0, std::memcmp(alone.data(), global[size_t(node)].data(), sizeof(double) * 16))
+            << "node " << node << " at " << t << (clip ? "" : " (rest pose)");
+      }
+    }
+}
 
 // ----- Frame times -----------------------------------------------------------------------------------------
 

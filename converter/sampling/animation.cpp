@@ -149,55 +149,83 @@ Status build_node_graph(const tinygltf::Model& model, NodeGraph& graph) {
   return Status::Ok();
 }
 
+namespace {
+
+// A node's local TRS at some time: its own, or a clip's tracks where they animate it.
+struct Trs {
+  double translation[3] = {0, 0, 0};
+  double rotation[4] = {0, 0, 0, 1};
+  double scale[3] = {1, 1, 1};
+  bool animated = false;
+};
+
+Trs rest_trs(const tinygltf::Node& node) {
+  Trs local;
+  if (node.translation.size() == 3) std::copy(node.translation.begin(), node.translation.end(), local.translation);
+  if (node.rotation.size() == 4) std::copy(node.rotation.begin(), node.rotation.end(), local.rotation);
+  if (node.scale.size() == 3) std::copy(node.scale.begin(), node.scale.end(), local.scale);
+  return local;
+}
+
+void animate(const Track& track, double t, Trs& local) {
+  switch (track.path) {
+    case TargetPath::translation: track.curve.evaluate(t, false, local.translation); break;
+    case TargetPath::rotation: track.curve.evaluate(t, true, local.rotation); break;
+    case TargetPath::scale: track.curve.evaluate(t, false, local.scale); break;
+    case TargetPath::weights: return;
+  }
+  local.animated = true;
+}
+
+Eigen::Matrix4d local_matrix(const tinygltf::Node& node, const Trs& local) {
+  Eigen::Matrix4d matrix = Eigen::Matrix4d::Identity();
+  // A node with a matrix is not animated by TRS channels (the specification forbids both); should a file do
+  // it anyway, the animated TRS wins, as in common viewers.
+  if (node.matrix.size() == 16 && !local.animated) {
+    for (int i = 0; i < 16; ++i) matrix(i % 4, i / 4) = node.matrix[size_t(i)];
+  } else {
+    double q[4] = {local.rotation[0], local.rotation[1], local.rotation[2], local.rotation[3]};
+    normalize_quaternion(q);
+    const Eigen::Quaterniond rotation(q[3], q[0], q[1], q[2]);
+    matrix.block<3, 3>(0, 0) =
+        rotation.toRotationMatrix() * Eigen::Vector3d(local.scale[0], local.scale[1], local.scale[2]).asDiagonal();
+    matrix.block<3, 1>(0, 3) = Eigen::Vector3d(local.translation[0], local.translation[1], local.translation[2]);
+  }
+  return matrix;
+}
+
+}  // namespace
+
 void evaluate_global_transforms(const tinygltf::Model& model, const NodeGraph& graph, const Clip* clip, double t,
                                 std::vector<Eigen::Matrix4d>& global) {
   const size_t count = model.nodes.size();
-  struct Trs {
-    double translation[3] = {0, 0, 0};
-    double rotation[4] = {0, 0, 0, 1};
-    double scale[3] = {1, 1, 1};
-    bool animated = false;
-  };
   std::vector<Trs> trs(count);
-  for (size_t n = 0; n < count; ++n) {
-    const tinygltf::Node& node = model.nodes[n];
-    Trs& local = trs[n];
-    if (node.translation.size() == 3) std::copy(node.translation.begin(), node.translation.end(), local.translation);
-    if (node.rotation.size() == 4) std::copy(node.rotation.begin(), node.rotation.end(), local.rotation);
-    if (node.scale.size() == 3) std::copy(node.scale.begin(), node.scale.end(), local.scale);
-  }
+  for (size_t n = 0; n < count; ++n) trs[n] = rest_trs(model.nodes[n]);
   if (clip)
-    for (const Track& track : clip->tracks) {
-      Trs& local = trs[size_t(track.node)];
-      switch (track.path) {
-        case TargetPath::translation: track.curve.evaluate(t, false, local.translation); break;
-        case TargetPath::rotation: track.curve.evaluate(t, true, local.rotation); break;
-        case TargetPath::scale: track.curve.evaluate(t, false, local.scale); break;
-        case TargetPath::weights: continue;
-      }
-      local.animated = true;
-    }
-
+    for (const Track& track : clip->tracks) animate(track, t, trs[size_t(track.node)]);
   global.resize(count);
   for (int n : graph.order) {
-    const tinygltf::Node& node = model.nodes[size_t(n)];
-    const Trs& local = trs[size_t(n)];
-    Eigen::Matrix4d matrix = Eigen::Matrix4d::Identity();
-    // A node with a matrix is not animated by TRS channels (the specification forbids both); should a file do
-    // it anyway, the animated TRS wins, as in common viewers.
-    if (node.matrix.size() == 16 && !local.animated) {
-      for (int i = 0; i < 16; ++i) matrix(i % 4, i / 4) = node.matrix[size_t(i)];
-    } else {
-      double q[4] = {local.rotation[0], local.rotation[1], local.rotation[2], local.rotation[3]};
-      normalize_quaternion(q);
-      const Eigen::Quaterniond rotation(q[3], q[0], q[1], q[2]);
-      matrix.block<3, 3>(0, 0) = rotation.toRotationMatrix() *
-                                 Eigen::Vector3d(local.scale[0], local.scale[1], local.scale[2]).asDiagonal();
-      matrix.block<3, 1>(0, 3) = Eigen::Vector3d(local.translation[0], local.translation[1], local.translation[2]);
-    }
+    const Eigen::Matrix4d matrix = local_matrix(model.nodes[size_t(n)], trs[size_t(n)]);
     const int parent = graph.parent[size_t(n)];
     global[size_t(n)] = parent < 0 ? matrix : Eigen::Matrix4d(global[size_t(parent)] * matrix);
   }
+}
+
+Eigen::Matrix4d evaluate_global_transform(const tinygltf::Model& model, const NodeGraph& graph, const Clip* clip,
+                                          double t, int node) {
+  std::vector<int> chain;  // the node, then its ancestors
+  for (int n = node; n >= 0; n = graph.parent[size_t(n)]) chain.push_back(n);
+  std::vector<Trs> trs(chain.size());
+  for (size_t i = 0; i < chain.size(); ++i) trs[i] = rest_trs(model.nodes[size_t(chain[i])]);
+  if (clip)
+    for (const Track& track : clip->tracks) {
+      const auto at = std::find(chain.begin(), chain.end(), track.node);
+      if (at != chain.end()) animate(track, t, trs[size_t(at - chain.begin())]);
+    }
+  Eigen::Matrix4d global = local_matrix(model.nodes[size_t(chain.back())], trs.back());
+  for (size_t i = chain.size() - 1; i-- > 0;)
+    global = Eigen::Matrix4d(global * local_matrix(model.nodes[size_t(chain[i])], trs[i]));
+  return global;
 }
 
 double largest_scale(const Eigen::Matrix4d& transform) {

@@ -56,4 +56,8 @@ double largest_scale(const Eigen::Matrix4d& transform);
 void evaluate_global_transforms(const tinygltf::Model& model, const NodeGraph& graph, const Clip* clip, double t,
                                 std::vector<Eigen::Matrix4d>& global);
 
+// evaluate_global_transforms' transform of `node` alone: its ancestors' products only, the same numbers.
+Eigen::Matrix4d evaluate_global_transform(const tinygltf::Model& model, const NodeGraph& graph, const Clip* clip,
+                                          double t, int node);
+
 }  // namespace segmorph

@@ -363,10 +363,8 @@ FrameSequence moved_positions(const tinygltf::Model& model, const NodeGraph& gra
   out.times = clip ? times : std::vector<float>{0.0f};
   out.frame_count = out.times.size();
   out.positions.resize(out.frame_count * out.vertex_count * 3);
-  std::vector<Eigen::Matrix4d> global;
   for (size_t f = 0; f < out.frame_count; ++f) {
-    evaluate_global_transforms(model, graph, clip, out.times[f], global);
-    const Eigen::Matrix4d& transform = global[size_t(node)];
+    const Eigen::Matrix4d transform = evaluate_global_transform(model, graph, clip, out.times[f], node);
     for (size_t v = 0; v < out.vertex_count; ++v) {
       const float* p = &positions[v * 3];
       const Eigen::Vector4d moved = transform * Eigen::Vector4d(p[0], p[1], p[2], 1.0);
