@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "accessor.h"
 #include "bake/bake.h"
 #include "gltf/delivered_size.h"
 #include "gltf/load.h"
@@ -223,6 +224,44 @@ TEST(Compressed, PlaceholderOfANodeWithAMatrixTargetsAnEmptyChild) {
 }
 
 // Rules 1, 3 and 7: a compressed primitive is a triangle list, its node has no skin, clip times are FLOAT SCALAR.
+// What the encoder's own measurements decode: the same positions as a decode, without the normals' morph targets
+// (turning every frame's normals is most of a decode's work there).
+TEST(Compressed, PositionsOnlyDecodeHasTheDecodesPositionsAndNoNormalTargets) {
+  const tinygltf::Model model = encoded(rigged_simple());
+  tinygltf::Model whole = model, positions = model;
+  ASSERT_TRUE(decode_compressed_model(whole).ok());
+  ASSERT_TRUE(decode_compressed_positions(positions).ok());
+  ASSERT_EQ(whole.meshes.size(), positions.meshes.size());
+  size_t targets = 0, normal_targets = 0;
+  for (size_t m = 0; m < whole.meshes.size(); ++m) {
+    ASSERT_EQ(whole.meshes[m].primitives.size(), positions.meshes[m].primitives.size());
+    for (size_t p = 0; p < whole.meshes[m].primitives.size(); ++p) {
+      const tinygltf::Primitive& a = whole.meshes[m].primitives[p];
+      const tinygltf::Primitive& b = positions.meshes[m].primitives[p];
+      ASSERT_EQ(a.targets.size(), b.targets.size());
+      std::vector<float> x, y;
+      ASSERT_TRUE(read_floats(whole, a.attributes.at("POSITION"), "whole", x).ok());
+      ASSERT_TRUE(read_floats(positions, b.attributes.at("POSITION"), "positions", y).ok());
+      EXPECT_EQ(x, y);
+      for (size_t t = 0; t < a.targets.size(); ++t) {
+        ++targets;
+        normal_targets += a.targets[t].count("NORMAL");
+        EXPECT_EQ(b.targets[t].count("NORMAL"), 0u);
+        ASSERT_TRUE(read_floats(whole, a.targets[t].at("POSITION"), "whole", x).ok());
+        ASSERT_TRUE(read_floats(positions, b.targets[t].at("POSITION"), "positions", y).ok());
+        EXPECT_EQ(x, y) << "mesh " << m << " primitive " << p << " target " << t;
+      }
+    }
+  }
+  EXPECT_GT(targets, 0u);
+  EXPECT_EQ(normal_targets, targets);  // a decode turns the normals of every frame
+  AnimationComparison comparison;
+  compare_decoded(rigged_simple(), positions, comparison);
+  AnimationComparison reference;
+  compare_decoded(rigged_simple(), whole, reference);
+  EXPECT_EQ(comparison.worst.kg_percent, reference.worst.kg_percent);
+}
+
 TEST(Compressed, DecodeRefusesWhatTheValidityRulesForbid) {
   const tinygltf::Model good = encoded(rigged_simple());
   const int host = compressed_node(good);

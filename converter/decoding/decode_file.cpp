@@ -78,10 +78,11 @@ DecodedFrames decoded_frames(int mesh, int primitive, bool targets, const std::v
 }
 
 // Decodes the stream of a primitive that keeps its morph targets and fills the targets in: POSITION with the
-// decoded displacements, NORMAL (where the target has it) turned by the decoder (AnimationDecoder::turn_normals).
-// `bytes`: the stream's length.
+// decoded displacements, NORMAL (where the target has it) turned by the decoder (AnimationDecoder::turn_normals), or
+// without `normals` removed. `bytes`: the stream's length.
 Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
-                       const std::string& what, size_t threads, size_t& bytes, std::vector<FrameSequence>* frames) {
+                       const std::string& what, size_t threads, bool with_normals, size_t& bytes,
+                       std::vector<FrameSequence>* frames) {
   SampledPrimitive rest;
   if (primitive.targets.empty()) return Status(StatusCode::bad_data, what + ": it keeps morph targets but has none");
   SEGMORPH_RETURN_IF_ERROR(
@@ -107,6 +108,7 @@ Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, c
     if (!target.count("POSITION"))
       return Status(StatusCode::bad_data, what + ": a kept morph target has no POSITION");
     target["POSITION"] = writer.add_floats(deltas[t].data(), vertex_count, TINYGLTF_TYPE_VEC3, true, 0);
+    if (!with_normals) target.erase("NORMAL");
     if (!target.count("NORMAL")) continue;
     if (!normals) return Status(StatusCode::bad_data, what + ": a morph target has NORMAL, the primitive has none");
     const Status turned = rest.normals->turn_normals(rest.rest_normals.data(), clips[0].frame(t), 1,
@@ -274,10 +276,11 @@ Status clip_times(const tinygltf::Model& model, const CompressedPrimitive& compr
   return Status::Ok();
 }
 
-// The primitives of a mesh that plays clips, decoded into `node` (sampled as bake takes them).
+// The primitives of a mesh that plays clips, decoded into `node` (sampled as bake takes them; without `normals`, with
+// no rest normals, so that the frames are baked without them).
 Status decode_clip_mesh(tinygltf::Model& model, const AnimatedNode& animated,
-                        const std::vector<CompressedPrimitive>& streams, size_t threads, SampledNode& node,
-                        DecodedSizes& found, std::vector<DecodedFrames>* decoded) {
+                        const std::vector<CompressedPrimitive>& streams, size_t threads, bool with_normals,
+                        SampledNode& node, DecodedSizes& found, std::vector<DecodedFrames>* decoded) {
   node.node = &animated;
   tinygltf::Mesh& mesh = model.meshes[size_t(animated.mesh)];
   for (const CompressedClip& clip : streams[0].clips) node.clip_is_step.push_back(clip.step);
@@ -292,6 +295,7 @@ Status decode_clip_mesh(tinygltf::Model& model, const AnimatedNode& animated,
     out.primitive = int(p);
     size_t bytes = 0;
     SEGMORPH_RETURN_IF_ERROR(decode_primitive_stream(model, primitive, streams[p], frames, what, threads, out, bytes));
+    if (!with_normals) out.rest_normals.clear(), out.normals.reset();
     found.animation_bytes += bytes;
     ++found.primitives;
     for (size_t c = 0; c < out.clips.size(); ++c) out.clips[c].times = std::move(times[c]);
@@ -304,13 +308,14 @@ Status decode_clip_mesh(tinygltf::Model& model, const AnimatedNode& animated,
 
 // The primitives of a mesh that keeps its morph targets, filled in.
 Status decode_target_mesh(tinygltf::Model& model, size_t m, const std::vector<CompressedPrimitive>& primitives,
-                          size_t threads, DecodedSizes& found, std::vector<DecodedFrames>* decoded) {
+                          size_t threads, bool with_normals, DecodedSizes& found,
+                          std::vector<DecodedFrames>* decoded) {
   for (size_t p = 0; p < primitives.size(); ++p) {
     size_t bytes = 0;
     std::vector<FrameSequence> displacements;
     SEGMORPH_RETURN_IF_ERROR(restore_targets(model, model.meshes[m].primitives[p], primitives[p],
                                              "mesh " + std::to_string(m) + " primitive " + std::to_string(p),
-                                             threads, bytes, decoded ? &displacements : nullptr));
+                                             threads, with_normals, bytes, decoded ? &displacements : nullptr));
     if (decoded) decoded->push_back(decoded_frames(int(m), int(p), true, displacements));
     found.animation_bytes += bytes;
     ++found.primitives;
@@ -318,10 +323,8 @@ Status decode_target_mesh(tinygltf::Model& model, size_t m, const std::vector<Co
   return Status::Ok();
 }
 
-}  // namespace
-
-Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std::vector<DecodedFrames>* decoded,
-                               size_t threads) {
+Status decode_compressed(tinygltf::Model& model, DecodedSizes* sizes, std::vector<DecodedFrames>* decoded,
+                         size_t threads, bool with_normals) {
   SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(model, threads));
   if (!declares_extension(model, kExtensionName)) return Status::Ok();
   DecodedSizes found;
@@ -339,7 +342,7 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std:
     SEGMORPH_RETURN_IF_ERROR(read_compressed_mesh(model, m, primitives, user));
     if (primitives.empty()) continue;
     if (primitives[0].morph_targets) {
-      SEGMORPH_RETURN_IF_ERROR(decode_target_mesh(model, m, primitives, threads, found, decoded));
+      SEGMORPH_RETURN_IF_ERROR(decode_target_mesh(model, m, primitives, threads, with_normals, found, decoded));
       continue;
     }
     AnimatedNode node;
@@ -353,7 +356,7 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std:
   std::vector<SampledNode> sampled(scene.animated.size());
   for (size_t i = 0; i < scene.animated.size(); ++i)
     SEGMORPH_RETURN_IF_ERROR(
-        decode_clip_mesh(model, scene.animated[i], streams[i], threads, sampled[i], found, decoded));
+        decode_clip_mesh(model, scene.animated[i], streams[i], threads, with_normals, sampled[i], found, decoded));
   for (tinygltf::Animation& animation : model.animations)
     animation.channels.erase(
         std::remove_if(animation.channels.begin(), animation.channels.end(), is_placeholder_channel),
@@ -366,6 +369,17 @@ Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std:
     });
   if (sizes) *sizes = found;
   return Status::Ok();
+}
+
+}  // namespace
+
+Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes, std::vector<DecodedFrames>* decoded,
+                               size_t threads) {
+  return decode_compressed(model, sizes, decoded, threads, true);
+}
+
+Status decode_compressed_positions(tinygltf::Model& model, size_t threads) {
+  return decode_compressed(model, nullptr, nullptr, threads, false);
 }
 
 }  // namespace segmorph

@@ -42,4 +42,9 @@ Status decode_draco_primitives(tinygltf::Model& model, size_t threads = 1);
 Status decode_compressed_model(tinygltf::Model& model, DecodedSizes* sizes = nullptr,
                                std::vector<DecodedFrames>* decoded = nullptr, size_t threads = 1);
 
+// decode_compressed_model for what measures positions only (the encoder's checks of its own output): the same
+// POSITION data, without the normals a decoded stream's frames and kept targets would carry (no NORMAL morph targets
+// are written; the rest NORMAL stays), which would cost a turn of every frame's normals.
+Status decode_compressed_positions(tinygltf::Model& model, size_t threads = 1);
+
 }  // namespace segmorph

@@ -226,7 +226,7 @@ Status measure(const SampledFile& file, const Encoded& encoded, size_t threads, 
   report_progress(progress, "measuring the encode against the input: decoding it");
   tinygltf::Model model = encoded.model;
   // On every thread (analyze_model's own decode would use one; it finds nothing compressed left).
-  Status status = decode_compressed_model(model, nullptr, nullptr, threads);
+  Status status = decode_compressed_positions(model, threads);
   if (status.ok()) status = analyze_model(std::move(model), SampleSettings(), false, {}, decoded);
   report_progress(progress, "measuring the encode against the input: comparing the frames");
   if (status.ok())

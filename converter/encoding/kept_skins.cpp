@@ -61,7 +61,7 @@ std::vector<SampledNode> thinned(const std::vector<SampledNode>& sampled) {
 // measures it.
 Status measured_kg(const SampledFile& file, const std::vector<SampledNode>& reference, tinygltf::Model&& encoded,
                    VertexMatches& matches, size_t threads, double& kg) {
-  SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(encoded));
+  SEGMORPH_RETURN_IF_ERROR(decode_compressed_positions(encoded));
   Scene scene;
   SEGMORPH_RETURN_IF_ERROR(analyze_scene(encoded, scene));
   AnimationComparison comparison;
@@ -100,7 +100,7 @@ Status code_tracks(const SampledFile& file, const CodecSettings& codec, bool kep
   SEGMORPH_RETURN_IF_ERROR(decode_draco_primitives(decoded, codec.threads));
   {
     tinygltf::Model streams = decoded;
-    SEGMORPH_RETURN_IF_ERROR(decode_compressed_model(streams));
+    SEGMORPH_RETURN_IF_ERROR(decode_compressed_positions(streams));
     size_t bytes = 0;
     for (const tinygltf::Buffer& buffer : streams.buffers) bytes += buffer.data.size();
     if (bytes <= kHeldDecodeBytes) decoded = std::move(streams);
