@@ -1,10 +1,12 @@
 #include "encode/segmentation/segmentation.h"
 
+#include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <random>
 #include <set>
 #include <thread>
@@ -178,9 +180,120 @@ TEST(Segmentation, MergeJoinsClustersThatMoveAlikeFirst) {
   EXPECT_NE(strip(2), strip(3));
 }
 
+// merge_clusters as first written (a merge of its own for each target), the reference for the shared merges.
+struct ReferenceStatistics {
+  Eigen::Matrix4d gram = Eigen::Matrix4d::Zero();
+  std::vector<Eigen::Matrix<double, 4, 3>> moments;  // F
+  std::vector<double> energy;                        // F
+  size_t size = 0;
+
+  double residual() const {
+    Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix4d> decomposition(gram);
+    decomposition.setThreshold(1e-10);
+    const Eigen::Matrix4d inverse = decomposition.pseudoInverse();
+    double sum = 0;
+    for (size_t f = 0; f < moments.size(); ++f)
+      sum += energy[f] - (moments[f].transpose() * inverse * moments[f]).trace();
+    return std::max(sum, 0.0);
+  }
+  void add(const ReferenceStatistics& other) {
+    gram += other.gram;
+    for (size_t f = 0; f < moments.size(); ++f) {
+      moments[f] += other.moments[f];
+      energy[f] += other.energy[f];
+    }
+    size += other.size;
+  }
+};
+
+Clusters merged_for_one_target(const Clusters& clusters, size_t target, const float* base, const Trajectories& frames,
+                               const VertexAdjacency& adjacency) {
+  if (clusters.count <= std::max<size_t>(target, 1)) return clusters;
+  const size_t vertex_count = frames.vertex_count, frame_count = frames.frame_count;
+  double origin[3] = {0, 0, 0};
+  for (size_t v = 0; v < vertex_count; ++v)
+    for (int c = 0; c < 3; ++c) origin[c] += base[v * 3 + size_t(c)] / double(vertex_count);
+
+  std::vector<ReferenceStatistics> statistics(clusters.count);
+  for (ReferenceStatistics& s : statistics) {
+    s.moments.assign(frame_count, Eigen::Matrix<double, 4, 3>::Zero());
+    s.energy.assign(frame_count, 0.0);
+  }
+  for (size_t v = 0; v < vertex_count; ++v) {
+    ReferenceStatistics& s = statistics[clusters.label[v]];
+    const Eigen::Vector4d x(base[v * 3] - origin[0], base[v * 3 + 1] - origin[1], base[v * 3 + 2] - origin[2], 1.0);
+    s.gram += x * x.transpose();
+    ++s.size;
+    for (size_t f = 0; f < frame_count; ++f) {
+      const float* p = frames.frame(f) + v * 3;
+      const Eigen::RowVector3d y(p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]);
+      s.moments[f] += x * y;
+      s.energy[f] += y.squaredNorm();
+    }
+  }
+  std::vector<double> residual(clusters.count);
+  for (size_t k = 0; k < clusters.count; ++k) residual[k] = statistics[k].residual();
+
+  // Candidate pairs: clusters that share an edge; clusters that share none with anyone (small separate
+  // components) may join any cluster.
+  std::vector<std::vector<bool>> touching(clusters.count, std::vector<bool>(clusters.count, false));
+  for (size_t v = 0; v < vertex_count; ++v)
+    for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i) {
+      const uint32_t a = clusters.label[v], b = clusters.label[adjacency.neighbour[i]];
+      if (a != b) touching[a][b] = touching[b][a] = true;
+    }
+  std::vector<bool> alive(clusters.count, true);
+  std::vector<uint32_t> into(clusters.count);
+  std::iota(into.begin(), into.end(), 0u);
+  auto isolated = [&](size_t a) {
+    return std::none_of(touching[a].begin(), touching[a].end(), [](bool t) { return t; });
+  };
+  // Cost of merging a and b (the increase of the residual), cached; NaN where they may not merge.
+  auto merge_cost = [&](size_t a, size_t b) -> double {
+    if (!touching[a][b] && !isolated(a) && !isolated(b)) return NAN;
+    ReferenceStatistics merged = statistics[a];
+    merged.add(statistics[b]);
+    return merged.residual() - residual[a] - residual[b];
+  };
+  std::vector<std::vector<double>> cost(clusters.count, std::vector<double>(clusters.count, NAN));
+  for (size_t a = 0; a < clusters.count; ++a)
+    for (size_t b = a + 1; b < clusters.count; ++b) cost[a][b] = merge_cost(a, b);
+
+  for (size_t count = clusters.count; count > target; --count) {
+    double best_cost = INFINITY;
+    size_t best_a = 0, best_b = 0;
+    for (size_t a = 0; a < clusters.count; ++a)
+      for (size_t b = a + 1; b < clusters.count && alive[a]; ++b)
+        if (alive[b] && cost[a][b] < best_cost) best_cost = cost[a][b], best_a = a, best_b = b;
+    if (!std::isfinite(best_cost)) break;
+    statistics[best_a].add(statistics[best_b]);
+    residual[best_a] = statistics[best_a].residual();
+    alive[best_b] = false;
+    into[best_b] = uint32_t(best_a);
+    for (size_t k = 0; k < clusters.count; ++k) {
+      touching[best_a][k] = touching[best_a][k] || touching[best_b][k];
+      touching[k][best_a] = touching[best_a][k];
+      touching[best_b][k] = touching[k][best_b] = false;
+    }
+    touching[best_a][best_a] = false;
+    for (size_t k = 0; k < clusters.count; ++k)
+      if (alive[k] && k != best_a) {
+        const double c = merge_cost(std::min(k, best_a), std::max(k, best_a));
+        cost[std::min(k, best_a)][std::max(k, best_a)] = c;
+      }
+  }
+  std::vector<uint32_t> label(vertex_count);
+  for (size_t v = 0; v < vertex_count; ++v) {
+    uint32_t k = clusters.label[v];
+    while (into[k] != k) k = into[k];
+    label[v] = k;
+  }
+  return compact(label);
+}
+
 TEST(Segmentation, SharedMergesGiveEachTargetWhatItsOwnMergeGives) {
   // Sixteen column strips of a grid, each turning by its own angle: a target asked after a smaller one (whose merges
-  // went further) must get the clusters of the merges down to it only, from any thread.
+  // went further) must get the clusters of the merges down to it only, from any thread; merge_clusters too.
   const Grid grid = make_grid(15, [](int, int) { return false; });
   const size_t vertex_count = grid.topology.welded_count();
   Clusters clusters;
@@ -200,10 +313,12 @@ TEST(Segmentation, SharedMergesGiveEachTargetWhatItsOwnMergeGives) {
   const std::vector<size_t> targets = {9, 3, 12, 1, 5, 16, 20, 0, 7};
   std::vector<Clusters> alone;
   for (size_t target : targets)
-    alone.push_back(merge_clusters(clusters, target, grid.base.data(), frames, grid.adjacency));
+    alone.push_back(merged_for_one_target(clusters, target, grid.base.data(), frames, grid.adjacency));
   EXPECT_EQ(alone[0].count, 9u);
   EXPECT_EQ(alone[1].count, 3u);
   EXPECT_EQ(alone[6].count, 16u);
+  for (size_t i = 0; i < targets.size(); ++i)
+    EXPECT_EQ(merge_clusters(clusters, targets[i], grid.base.data(), frames, grid.adjacency).label, alone[i].label);
   const ClusterMerges merges(clusters, grid.base.data(), frames, grid.adjacency);
   for (size_t i = 0; i < targets.size(); ++i) {
     const Clusters shared = merges.at(targets[i]);

@@ -30,7 +30,7 @@ struct WeldedTopology {
 };
 
 // Edge adjacency of the welded vertices in compressed-row form: the neighbours of w are
-// neighbour[offset[w] .. offset[w + 1]), sorted ascending.
+// neighbour[offset[w] .. offset[w + 1]), sorted ascending. Symmetric: u is w's neighbour when w is u's.
 struct VertexAdjacency {
   std::vector<uint32_t> offset;  // W + 1
   std::vector<uint32_t> neighbour;

@@ -18,10 +18,6 @@ inline void apply(const double* transform, const double* c, const float* x, doub
     y[r] = transform[r * 4] * d[0] + transform[r * 4 + 1] * d[1] + transform[r * 4 + 2] * d[2] + transform[r * 4 + 3];
 }
 
-}  // namespace
-
-namespace {
-
 constexpr uint32_t kFitted = UINT32_MAX;
 
 // fit_affine_motion, with each cluster k whose `source[k]` is not kFitted taking over cluster source[k]'s transforms

@@ -26,8 +26,9 @@ struct Trajectories {
 AffineMotion fit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
                                size_t threads = 1);
 
-// fit_affine_motion of `clusters`, where `previous` is that of `previous_clusters` (of the same vertices): a cluster
-// with the vertices of a previous one takes its fit over (the same numbers), and only the others are fitted.
+// fit_affine_motion of `clusters`, where `previous` is fit_affine_motion of `previous_clusters` (labels of the same
+// vertices) with the same base and frames: a cluster with the vertices of a previous one takes its fit over (the
+// same numbers), and only the others are fitted.
 AffineMotion refit_affine_motion(const float* base, const Trajectories& frames, const Clusters& clusters,
                                  const Clusters& previous_clusters, const AffineMotion& previous, size_t threads = 1);
 

@@ -79,7 +79,7 @@ DecodedFrames decoded_frames(int mesh, int primitive, bool targets, const std::v
 
 // Decodes the stream of a primitive that keeps its morph targets and fills the targets in: POSITION with the
 // decoded displacements, NORMAL (where the target has it) turned by the decoder (AnimationDecoder::turn_normals), or
-// without `normals` removed. `bytes`: the stream's length.
+// removed when not `with_normals`. `bytes`: the stream's length.
 Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, const CompressedPrimitive& compressed,
                        const std::string& what, size_t threads, bool with_normals, size_t& bytes,
                        std::vector<FrameSequence>* frames) {
@@ -108,9 +108,12 @@ Status restore_targets(tinygltf::Model& model, tinygltf::Primitive& primitive, c
     if (!target.count("POSITION"))
       return Status(StatusCode::bad_data, what + ": a kept morph target has no POSITION");
     target["POSITION"] = writer.add_floats(deltas[t].data(), vertex_count, TINYGLTF_TYPE_VEC3, true, 0);
-    if (!with_normals) target.erase("NORMAL");
     if (!target.count("NORMAL")) continue;
     if (!normals) return Status(StatusCode::bad_data, what + ": a morph target has NORMAL, the primitive has none");
+    if (!with_normals) {
+      target.erase("NORMAL");
+      continue;
+    }
     const Status turned = rest.normals->turn_normals(rest.rest_normals.data(), clips[0].frame(t), 1,
                                                      frame_normals.data(), frame_normals.size());
     if (!turned.ok()) return Status(turned.code(), what + ": " + turned.message());
@@ -276,8 +279,8 @@ Status clip_times(const tinygltf::Model& model, const CompressedPrimitive& compr
   return Status::Ok();
 }
 
-// The primitives of a mesh that plays clips, decoded into `node` (sampled as bake takes them; without `normals`, with
-// no rest normals, so that the frames are baked without them).
+// The primitives of a mesh that plays clips, decoded into `node` (sampled as bake takes them; when not
+// `with_normals`, with no rest normals, so that the frames are baked without them).
 Status decode_clip_mesh(tinygltf::Model& model, const AnimatedNode& animated,
                         const std::vector<CompressedPrimitive>& streams, size_t threads, bool with_normals,
                         SampledNode& node, DecodedSizes& found, std::vector<DecodedFrames>* decoded) {

@@ -319,7 +319,7 @@ Clusters refine_by_motion(const Clusters& clusters, const float* base, const Tra
   if (iterations_out) *iterations_out = iterations;
   if (motion_out)
     *motion_out = !have_fit                        ? fit_affine_motion(base, frames, refined, threads)
-                  : refined.label == fitted.label ? std::move(motion)
+                  : refined.label == fitted.label && refined.count == fitted.count ? std::move(motion)
                                                   : refit_affine_motion(base, frames, refined, fitted, motion, threads);
   return refined;
 }

@@ -216,7 +216,6 @@ struct ClusterMerges::Merging {
   }
 
   void start(const Clusters& clusters) {
-    started = true;
     count = clusters.count;
     const size_t vertex_count = frames.vertex_count, frame_count = frames.frame_count;
     double origin[3] = {0, 0, 0};
@@ -254,6 +253,7 @@ struct ClusterMerges::Merging {
     cost.assign(clusters.count, std::vector<double>(clusters.count, NAN));
     for (size_t a = 0; a < clusters.count; ++a)
       for (size_t b = a + 1; b < clusters.count; ++b) cost[a][b] = merge_cost(a, b);
+    started = true;  // last: an allocation that failed above leaves it to be started again
   }
 
   // Merges while more than `target` clusters are alive and some pair may merge.
