@@ -204,9 +204,12 @@ function threadSpeedups(speed, print, flags) {
   print(`The same encodes with \`--threads 1\` against the default (every core: ${cores} here), each run ${speed.repeats === 1 ? 'once' : `${speed.repeats} times`} ` +
         'and the median run\'s stage times summed over the files, and the speedup (one thread\'s time over every ' +
         'core\'s). The output is the same bytes for every thread count: the harness compares the two files of each input ' +
-        'and flags any that differ. The stages that split their work over threads are the per-frame motion fits, the ' +
-        'rate control\'s measurements (its candidate steps), the motion refinement\'s vertex moves, the comparison\'s ' +
-        'nodes and vertex pairing; the rest (the eigensolver, the entropy coder, Draco) runs on one.');
+        'and flags any that differ. The work that splits over threads (`segmorph encode --help`, --threads): the ' +
+        'cluster count\'s candidates, the per-frame motion fits, the motion refinement\'s vertex moves and the ' +
+        'cluster weights, each frame\'s reference, the rate control\'s measurements, the version-4 bases, the ' +
+        'decodes of version-4 frames, the Draco coding of rigid meshes, and the comparison with the input (its nodes, ' +
+        'vertex pairing and rigid meshes); the heat-diffusion eigenpairs of a mesh part below 60,000 vertices and the ' +
+        'writing of each stream run on one.');
   print();
   const groups = [['sequences', measured.filter((f) => f.label.startsWith('sequences/'))], ['every file', measured]];
   print(`| stage | ${groups.map(([name]) => `${name}: 1 thread | ${cores} threads | speedup`).join(' | ')} |`);
