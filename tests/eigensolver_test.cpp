@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <random>
 #include <string>
@@ -210,34 +211,36 @@ TEST(Eigensolver, TwoCallsGiveIdenticalVectors) {
   expect_eigenpairs(sphere_laplacian, a);
 }
 
-// Two spheres (radii 1 and 0.5, level 3) in one frame sequence, welded like real input.
-struct TwoSpheres {
+// Meshes side by side in one frame sequence, welded like real input.
+struct WeldedMesh {
   Mesh mesh;
   WeldedTopology topology;
   CotangentLaplacian laplacian;
 };
 
-TwoSpheres two_spheres() {
-  const Mesh big = icosphere(3, 1.0), small = icosphere(3, 0.5, Eigen::Vector3d(4, 0, 0));
+WeldedMesh welded(const std::vector<Mesh>& parts) {
   FrameSequence clip;
-  clip.vertex_count = big.vertex_count() + small.vertex_count();
   clip.frame_count = 1;
   clip.times = {0};
-  for (const Mesh* part : {&big, &small}) {
-    for (double p : part->positions) clip.positions.push_back(float(p));
+  for (const Mesh& part : parts) {
+    const uint32_t first = uint32_t(clip.positions.size() / 3);
+    for (double p : part.positions) clip.positions.push_back(float(p));
+    for (uint32_t v : part.triangles) clip.triangles.push_back(v + first);
   }
-  clip.triangles = big.triangles;
-  for (uint32_t v : small.triangles) clip.triangles.push_back(v + uint32_t(big.vertex_count()));
-  TwoSpheres spheres;
-  spheres.topology = weld_topology({clip});
-  spheres.mesh.positions = welded_positions(clip.frame(0), spheres.topology);
-  spheres.mesh.triangles = spheres.topology.triangles;
-  spheres.laplacian = build(spheres.mesh);
-  return spheres;
+  clip.vertex_count = clip.positions.size() / 3;
+  WeldedMesh out;
+  out.topology = weld_topology({clip});
+  out.mesh.positions = welded_positions(clip.frame(0), out.topology);
+  out.mesh.triangles = out.topology.triangles;
+  out.laplacian = build(out.mesh);
+  return out;
 }
 
+// Two spheres (radii 1 and 0.5, level 3).
+WeldedMesh two_spheres() { return welded({icosphere(3, 1.0), icosphere(3, 0.5, Eigen::Vector3d(4, 0, 0))}); }
+
 TEST(Eigensolver, EachComponentHasItsOwnZeroEigenvalue) {
-  const TwoSpheres spheres = two_spheres();
+  const WeldedMesh spheres = two_spheres();
   ASSERT_EQ(spheres.topology.component_count, 2u);
   // Whole mesh: two zero eigenvalues, whose vectors mix the components arbitrarily.
   const Eigenpairs whole = solve(spheres.laplacian, 4);
@@ -303,6 +306,63 @@ TEST(Eigensolver, ComponentCountIsClampedToTheComponentSize) {
   // The lone vertex: λ = 0 and φ = 1/sqrt(its tiny mass).
   const Eigenpairs& lone = spectra.components[1].eigenpairs;
   EXPECT_NEAR(lone.vectors(0, 0), 1 / std::sqrt(laplacian.mass[3]), 1e-12 / std::sqrt(laplacian.mass[3]));
+}
+
+// Spheres of 642, 162, 42 and 642 vertices (dense and shift-invert solves), a triangle and a lone vertex.
+WeldedMesh several_components() {
+  Mesh triangle, lone;
+  triangle.positions = {12, 0, 0, 13, 0, 0, 12, 1, 0};
+  triangle.triangles = {0, 1, 2};
+  lone.positions = {15, 5, 5};
+  return welded({icosphere(3, 1.0), icosphere(2, 0.7, Eigen::Vector3d(3, 0, 0)),
+                 icosphere(1, 0.4, Eigen::Vector3d(6, 0, 0)), icosphere(3, 0.5, Eigen::Vector3d(9, 0, 0)), triangle,
+                 lone});
+}
+
+TEST(Eigensolver, ComponentsOnThreadsAreEachSolvedAlone) {
+  const WeldedMesh mesh = several_components();
+  ASSERT_EQ(mesh.topology.component_count, 6u);
+  for (size_t threads : {1, 3}) {
+    SCOPED_TRACE(threads);
+    EigenSettings settings;
+    settings.threads = threads;
+    std::vector<std::string> steps;
+    settings.progress = [&](const std::string& step) { steps.push_back(step); };
+    ComponentSpectra spectra;
+    ASSERT_TRUE(component_spectra(mesh.laplacian, mesh.topology, 12, spectra, settings).ok());
+    ASSERT_EQ(spectra.components.size(), 6u);
+    EXPECT_FALSE(steps.empty());  // the largest component is the calling thread's
+    for (const ComponentSpectrum& component : spectra.components) {
+      // The reference: the component's own operator, solved alone on this thread.
+      const Eigen::Index n = Eigen::Index(component.vertices.size());
+      std::vector<Eigen::Triplet<double>> entries;
+      for (Eigen::Index j = 0; j < mesh.laplacian.stiffness.outerSize(); ++j)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(mesh.laplacian.stiffness, j); it; ++it)
+          if (mesh.topology.component[size_t(j)] == mesh.topology.component[component.vertices[0]])
+            entries.emplace_back(spectra.local_index[size_t(it.row())], spectra.local_index[size_t(j)], it.value());
+      Eigen::SparseMatrix<double> stiffness(n, n);
+      stiffness.setFromTriplets(entries.begin(), entries.end());
+      Eigen::VectorXd mass(n);
+      for (Eigen::Index i = 0; i < n; ++i) mass[i] = mesh.laplacian.mass[component.vertices[size_t(i)]];
+      Eigenpairs alone;
+      ASSERT_TRUE(smallest_eigenpairs(stiffness, mass, 12, alone).ok());
+      ASSERT_EQ(component.eigenpairs.values.size(), alone.values.size());
+      ASSERT_EQ(component.eigenpairs.vectors.size(), alone.vectors.size());
+      EXPECT_EQ(0, std::memcmp(component.eigenpairs.values.data(), alone.values.data(),
+                               sizeof(double) * size_t(alone.values.size())));
+      EXPECT_EQ(0, std::memcmp(component.eigenpairs.vectors.data(), alone.vectors.data(),
+                               sizeof(double) * size_t(alone.vectors.size())));
+    }
+  }
+  // Failures: the first in component order is the one told, whichever thread met it first. Forced shift-invert
+  // cannot find 100 pairs of the 42-, 3- and 1-vertex components.
+  EigenSettings forced;
+  forced.method = EigenMethod::shift_invert;
+  forced.threads = 3;
+  ComponentSpectra spectra;
+  const Status status = component_spectra(mesh.laplacian, mesh.topology, 100, spectra, forced);
+  EXPECT_EQ(status.code(), StatusCode::invalid_argument);
+  EXPECT_EQ(status.message().rfind("component 2 of 6: ", 0), 0u) << status.message();
 }
 
 TEST(Eigensolver, MeshWithDegenerateTrianglesStillSolves) {

@@ -120,9 +120,9 @@ std::vector<size_t> basis_sizes(size_t most) {
 // vectors LargestEigenvectors finds one by one (a quarter of the eigenproblem's size, when that is at least
 // kCappedBasisFrom), and whether that cap kept fewer than the energy would into *capped; the first vectors are then
 // those of an uncapped basis that also finds them one by one.
-Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible, bool* capped = nullptr) {
-  Eigen::MatrixXd scaled = rows;
-  for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
+//
+// pca_basis_of_scaled takes the rows already scaled by the square roots of their weights.
+Matrix pca_basis_of_scaled(const Eigen::MatrixXd& scaled, double negligible, bool* capped = nullptr) {
   const bool dual = scaled.rows() < scaled.cols();
   // The Gram matrix's lower triangle only (the solver reads no more): half the products of a full one.
   const Eigen::Index n = dual ? scaled.rows() : scaled.cols();
@@ -151,6 +151,12 @@ Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double n
     basis.row(j) = vector.transpose();
   }
   return basis;
+}
+
+Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible) {
+  Eigen::MatrixXd scaled = rows;
+  for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
+  return pca_basis_of_scaled(scaled, negligible);
 }
 
 struct Option {
@@ -506,10 +512,13 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
     std::vector<Eigen::Index> all(welded * 3);
     for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
     const std::vector<Eigen::Index> which = sample(all, most_rows);
-    Matrix sampled;
-    std::vector<double> sampled_weight;
-    gather(rows, weight, which, double(all.size()) / double(which.size()), sampled, sampled_weight);
-    stream_basis = pca_basis(sampled, sampled_weight, negligible, capped ? &stream_capped : nullptr);
+    // Gathered straight into the scaled rows (the same values as gather() and pca_basis() make: one copy, not two).
+    const double scale = double(all.size()) / double(which.size());
+    Eigen::MatrixXd scaled(Eigen::Index(which.size()), rows.cols());
+    for (size_t i = 0; i < which.size(); ++i)
+      scaled.row(Eigen::Index(i)) =
+          rows.row(which[i]).cast<double>() * std::sqrt(weight[size_t(which[i])] * scale);
+    stream_basis = pca_basis_of_scaled(scaled, negligible, capped ? &stream_capped : nullptr);
   };
   parallel_items(clusters + 1, threads, [&](size_t item) {
     if (item == 0) {

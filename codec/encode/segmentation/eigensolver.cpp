@@ -13,6 +13,7 @@
 #include <functional>
 #include <new>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include "common/parallel.h"
@@ -471,7 +472,17 @@ Status component_spectra(const CotangentLaplacian& laplacian, const WeldedTopolo
     }
   }
 
-  for (size_t c = 0; c < topology.component_count; ++c) {
+  // The components side by side, larger first (each solve is its own: the pairs do not depend on the threads); the
+  // steps told only from the calling thread's. The first failure in component order is the one returned.
+  std::vector<size_t> order(topology.component_count);
+  for (size_t c = 0; c < order.size(); ++c) order[c] = c;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return out.components[a].vertices.size() > out.components[b].vertices.size();
+  });
+  std::vector<Status> statuses(order.size(), Status::Ok());
+  const std::thread::id caller = std::this_thread::get_id();
+  parallel_items(order.size(), thread_count(settings.threads), [&](size_t item) {
+    const size_t c = order[item];
     ComponentSpectrum& component = out.components[c];
     const Eigen::Index n = Eigen::Index(component.vertices.size());
     SparseMatrix stiffness(n, n);
@@ -479,12 +490,14 @@ Status component_spectra(const CotangentLaplacian& laplacian, const WeldedTopolo
     blocks[c] = {};
     Eigen::VectorXd mass(n);
     for (Eigen::Index i = 0; i < n; ++i) mass[i] = laplacian.mass[component.vertices[size_t(i)]];
-    const Status status = smallest_eigenpairs(stiffness, mass, count, component.eigenpairs, settings);
-    if (!status.ok()) {
-      return Status(status.code(), "component " + std::to_string(c) + " of " +
-                                       std::to_string(topology.component_count) + ": " + status.message());
-    }
-  }
+    EigenSettings own = settings;
+    if (std::this_thread::get_id() != caller) own.progress = nullptr;
+    statuses[c] = smallest_eigenpairs(stiffness, mass, count, component.eigenpairs, own);
+  });
+  for (size_t c = 0; c < statuses.size(); ++c)
+    if (!statuses[c].ok())
+      return Status(statuses[c].code(), "component " + std::to_string(c) + " of " +
+                                            std::to_string(topology.component_count) + ": " + statuses[c].message());
   return Status::Ok();
 }
 
