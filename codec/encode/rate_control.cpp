@@ -8,7 +8,6 @@
 #include <functional>
 #include <iterator>
 #include <memory>
-#include <optional>
 #include <string>
 #include <thread>
 
@@ -67,9 +66,10 @@ class RateControlDriver {
   template <typename Choose>
   void refine_steps(StepChoice& choice, Choose choose);
   void prepare_motion(double motion_step);
+  void quantize_motion(double motion_step, StreamContent& content, size_t threads) const;
   void choose_references();
   void drop_references();
-  void choose_motion_coding();
+  void choose_motion_coding(StreamContent& content, size_t threads) const;
   double estimated_cost();
   bool keep_references();
   bool references_rejected();
@@ -95,7 +95,7 @@ class RateControlDriver {
   StreamContent& content_;
   StreamReport& report_;
   double mean_step_ = 0;
-  std::optional<FramePredictions> predictions_;  // of the current motion
+  std::unique_ptr<FramePredictions> predictions_;  // of the current motion
   StepChoice choice_;
   SubbandCurve curves_[3];
   double residual_budget_ = 0;
@@ -148,17 +148,23 @@ void RateControlDriver::refine_steps(StepChoice& choice, Choose choose) {
 void RateControlDriver::prepare_motion(double motion_step) {
   auto begin = EncodeClock::now();
   report_progress(settings_, "rate control: quantizing the motion");
+  const size_t threads = thread_count(settings_.threads);
+  quantize_motion(motion_step, content_, threads);
+  if (!references_chosen_) choose_references();
+  choose_motion_coding(content_, threads);
+  report_.ms_motion += milliseconds_since(begin);
+  begin = EncodeClock::now();
+  predictions_ = std::make_unique<FramePredictions>(content_, p_.base_welded);
+  report_.ms_prediction += milliseconds_since(begin);
+}
+
+// The quantized motion and weights of a motion step, into `content`.
+void RateControlDriver::quantize_motion(double motion_step, StreamContent& content, size_t threads) const {
   motion_step = std::max(motion_step, p_.finest_step);
   const bool lossless = settings_.mode == RateMode::lossless;
   quantize_motion_and_weights(fitted_, lossless ? 1e-6 : motion_step / radius_, lossless ? 1e-6 * radius_ : motion_step,
                               p_.base_welded, p_.trajectories, clusters_, p_.adjacency, settings_.blend_weights,
-                              content_, settings_.threads);
-  if (!references_chosen_) choose_references();
-  choose_motion_coding();
-  report_.ms_motion += milliseconds_since(begin);
-  begin = EncodeClock::now();
-  predictions_.emplace(content_, p_.base_welded);
-  report_.ms_prediction += milliseconds_since(begin);
+                              content, threads);
 }
 
 // Each frame's reference, once, on the first quantized motion (the motion step trials change it little): version 3's
@@ -184,25 +190,27 @@ void RateControlDriver::drop_references() {
                            (flags_without_references_ & temporal));
   content_.reference_window = 0;
   content_.references.clear();
-  choose_motion_coding();
+  choose_motion_coding(content_, thread_count(settings_.threads));
 }
 
-// The motion's coding, whichever of version 3's takes fewest bytes: the plain differences, in contexts, or in contexts
-// and predicted linearly; then the weights' coding, plain or in contexts (ties to the plainer, which more decoders
-// read). The two are separate sections of the head: each is chosen on its own.
-void RateControlDriver::choose_motion_coding() {
+// The motion's coding of `content` (whose residuals it clears), whichever of version 3's takes fewest bytes: the
+// plain differences, in contexts, or in contexts and predicted linearly; then the weights' coding, plain or in
+// contexts (ties to the plainer, which more decoders read). The two are separate sections of the head: each is chosen
+// on its own.
+void RateControlDriver::choose_motion_coding(StreamContent& content, size_t threads) const {
   const uint8_t contexts = format::kFlagMotionContexts, linear = format::kFlagLinearMotion;
   const uint8_t weights = format::kFlagWeightContexts;
-  content_.flags &= uint8_t(~(contexts | linear | weights));
+  content.flags &= uint8_t(~(contexts | linear | weights));
   if (!settings_.motion_contexts && !settings_.weight_contexts) return;
   // The motion's options written side by side, each from a copy of the content with its flags.
-  std::vector<uint8_t> options = {content_.flags};
+  std::vector<uint8_t> options = {content.flags};
   if (settings_.motion_contexts)
-    for (uint8_t option : {contexts, uint8_t(contexts | linear)}) options.push_back(uint8_t(content_.flags | option));
+    for (uint8_t option : {contexts, uint8_t(contexts | linear)}) options.push_back(uint8_t(content.flags | option));
   std::vector<size_t> bytes(options.size());
-  clear_residuals();
-  parallel_items(options.size(), thread_count(settings_.threads), [&](size_t i) {
-    StreamContent trial = content_;
+  content.residuals.clear();
+  content.narrow_residuals.clear();
+  parallel_items(options.size(), threads, [&](size_t i) {
+    StreamContent trial = content;
     trial.flags = options[i];
     bytes[i] = side_bytes_of(trial);
   });
@@ -210,10 +218,10 @@ void RateControlDriver::choose_motion_coding() {
   uint8_t best_flags = options[0];
   for (size_t i = 1; i < options.size(); ++i)
     if (bytes[i] < best) best = bytes[i], best_flags = options[i];
-  content_.flags = best_flags;
-  if (!settings_.weight_contexts || content_.weight_cluster.empty()) return;
-  content_.flags |= weights;
-  if (side_bytes() >= best) content_.flags = best_flags;
+  content.flags = best_flags;
+  if (!settings_.weight_contexts || content.weight_cluster.empty()) return;
+  content.flags |= weights;
+  if (side_bytes_of(content) >= best) content.flags = best_flags;
 }
 
 // What the current curves promise: with an error target the stream's estimated bytes, with a rate target the
@@ -314,37 +322,43 @@ void RateControlDriver::choose_motion_step_ratio() {
     return;
   }
   const StepChoice first = choice_;
-  double best_ratio = kMotionStepRatio, best_bytes = double(side_bytes()) + choice_.bits / 8;
-  SubbandCurve best_curves[3] = {curves_[0], curves_[1], curves_[2]};
-  // The other ratios' motion, each measured at the steps around the first's choice: side by side, each trial's walk
-  // on its share of the threads (a walk's curves do not depend on how many threads it has).
+  double best_bytes = double(side_bytes()) + choice_.bits / 8;
+  // The other ratios' motion, each quantized and coded from a copy of the first's content (whose references it keeps),
+  // and measured at the steps around the first's choice: the trials side by side, each on its share of the threads
+  // (neither a trial's motion nor its walk's curves depend on how many threads it has). The first's content and
+  // predictions stay as they are, for when it wins.
   struct Trial {
     StreamContent content;
     std::unique_ptr<FramePredictions> predictions;
     size_t side_bytes = 0;
     SubbandCurve curves[3];
+    double ms_motion = 0, ms_prediction = 0;
   };
   constexpr size_t kTrials = std::size(kMotionStepRatioTrials);
   std::vector<Trial> trials(kTrials);
-  for (size_t t = 0; t < kTrials; ++t) {
-    prepare_motion(kMotionStepRatioTrials[t] * guess);
-    trials[t].side_bytes = side_bytes();
-    trials[t].content = content_;
-    trials[t].predictions = std::make_unique<FramePredictions>(trials[t].content, p_.base_welded);
-  }
   const auto begin = EncodeClock::now();
   std::vector<double> around[3], near[3];
   for (int axis = 0; axis < 3; ++axis)
     for (int j = -1; j <= 1; ++j) around[axis].push_back(curves_[axis].step[first.index[axis]] * std::exp2(j / 4.0));
   unmeasured_steps(around, {}, p_.finest_step, near);
-  const std::string stage = "rate control: measuring " + std::to_string(kTrials) + " motion steps";
+  const std::string stage = "rate control: trying " + std::to_string(kTrials) + " motion steps";
   report_progress(settings_, stage, 0);
-  const size_t threads = thread_count(settings_.threads);
+  const size_t threads = thread_count(settings_.threads), share = std::max<size_t>(threads / kTrials, 1);
   // The fraction told is the trials' mean, from the calling thread only, whichever trials it walks itself.
   const std::thread::id caller = std::this_thread::get_id();
   std::array<std::atomic<double>, kTrials> walked;
   for (std::atomic<double>& fraction : walked) fraction.store(0, std::memory_order_relaxed);
   parallel_items(kTrials, threads, [&](size_t t) {
+    Trial& trial = trials[t];
+    auto start = EncodeClock::now();
+    trial.content = content_;
+    quantize_motion(kMotionStepRatioTrials[t] * guess, trial.content, share);
+    choose_motion_coding(trial.content, share);
+    trial.side_bytes = side_bytes_of(trial.content);
+    trial.ms_motion = milliseconds_since(start);
+    start = EncodeClock::now();
+    trial.predictions = std::make_unique<FramePredictions>(trial.content, p_.base_welded);
+    trial.ms_prediction = milliseconds_since(start);
     const bool calling = std::this_thread::get_id() == caller;
     const std::function<void(double)> progress = [&, t, calling](double fraction) {
       walked[t].store(fraction, std::memory_order_relaxed);
@@ -353,25 +367,29 @@ void RateControlDriver::choose_motion_step_ratio() {
       for (const std::atomic<double>& each : walked) sum += each.load(std::memory_order_relaxed);
       report_progress(settings_, stage, sum / kTrials);
     };
-    measure_subbands(trials[t].content, p_.traversal, *trials[t].predictions, p_.trajectories.positions,
-                     p_.multiplicity, near, trials[t].curves, std::max<size_t>(threads / kTrials, 1), progress);
+    measure_subbands(trial.content, p_.traversal, *trial.predictions, p_.trajectories.positions, p_.multiplicity, near,
+                     trial.curves, share, progress);
   });
   report_progress(settings_, stage, 1);
-  report_.ms_rate_control += milliseconds_since(begin);
+  double ms_trials = milliseconds_since(begin);
+  size_t best = kTrials;  // kTrials: the first
   for (size_t t = 0; t < kTrials; ++t) {
+    report_.ms_motion += trials[t].ms_motion, report_.ms_prediction += trials[t].ms_prediction;
+    ms_trials -= trials[t].ms_motion + trials[t].ms_prediction;
     const StepChoice trial = steps_for_distortion(trials[t].curves, p_.max_distortion());
     const double bytes = double(trials[t].side_bytes) + trial.bits / 8;
-    if (trial.distortion <= p_.max_distortion() && bytes < best_bytes) {
-      best_bytes = bytes, best_ratio = kMotionStepRatioTrials[t];
-      for (int axis = 0; axis < 3; ++axis) best_curves[axis] = trials[t].curves[axis];
-    }
+    if (trial.distortion <= p_.max_distortion() && bytes < best_bytes)
+      best_bytes = bytes, best = t;
   }
-  prepare_motion(best_ratio * guess);
-  for (int axis = 0; axis < 3; ++axis) curves_[axis] = best_curves[axis];
-  if (best_ratio == kMotionStepRatio)
+  report_.ms_rate_control += std::max(ms_trials, 0.0);
+  if (best == kTrials) {
     choice_ = first;  // already refined
-  else
+  } else {
+    content_ = std::move(trials[best].content);
+    predictions_ = std::move(trials[best].predictions);
+    for (int axis = 0; axis < 3; ++axis) curves_[axis] = std::move(trials[best].curves[axis]);
     residual_rate_control(false);
+  }
   set_residual_steps();
 }
 
