@@ -1,5 +1,6 @@
 // The version-4 transform coding of the residuals (codec/encode/transform_coding.h): temporal bases and coefficients
 // that meet a squared-error budget, checked on the decoder's frames.
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -69,8 +70,9 @@ TEST(TransformCoding, MeetsTheBudgetOnTheDecodersFrames) {
 // The bending sphere's frames moved along 40 temporal signals that every vertex shares, each with loadings of its
 // own: at a tight budget the choice takes more of the stream basis's vectors than the quarter of its eigenproblem
 // (96 frames: 24 vectors) it is first found with, so the basis is found again whole, and the budget still met.
-TEST(TransformCoding, FindsTheStreamBasisAgainWhenAChoiceReachesItsCap) {
-  constexpr size_t kFrames = 96, kSignals = 40;
+constexpr size_t kFrames = 96, kSignals = 40;
+
+FrameSequence signals_clip() {
   FrameSequence clip = bending_clip(kFrames, 0.6, 0.0);
   std::mt19937 random(7);
   std::normal_distribution<double> normal;
@@ -83,9 +85,13 @@ TEST(TransformCoding, FindsTheStreamBasisAgainWhenAChoiceReachesItsCap) {
       for (size_t s = 0; s < kSignals; ++s) offset += loading[i * kSignals + s] * wave[s * kFrames + f];
       clip.positions[f * clip.vertex_count * 3 + i] += float(0.01 * offset);
     }
+  return clip;
+}
+
+TEST(TransformCoding, FindsTheStreamBasisAgainWhenAChoiceReachesItsCap) {
   CodecSettings settings;
   settings.clusters = 16;
-  StageProblem stage(clip, settings);
+  StageProblem stage(signals_clip(), settings);
   const LoopStream loop = residual_loop(stage);
   ASSERT_GT(loop.squared, 0);
   const double budget = loop.squared / 4;
@@ -96,6 +102,45 @@ TEST(TransformCoding, FindsTheStreamBasisAgainWhenAChoiceReachesItsCap) {
   StreamContent content;
   ASSERT_TRUE(read_stream(stream.data(), stream.size(), stage.base, content).ok());
   EXPECT_GT(content.stream_basis.step.size(), kFrames / 4);
+}
+
+// The prelude made beside the residual loop's coding (code_stream's `beside`, as encode_animation makes it) gives
+// each budget's stream the same bytes as none, once handed to several tries; also where the uncapped stream basis
+// is found again from it (the signals' clip).
+TEST(TransformCoding, APreludeGivesTheSameStreamsAsNone) {
+  for (bool signals : {false, true}) {
+    SCOPED_TRACE(signals);
+    CodecSettings settings;
+    settings.clusters = signals ? 16 : 0;
+    StageProblem stage = signals ? StageProblem(signals_clip(), settings) : StageProblem(48, settings);
+    const Clusters chosen = choose_clusters(stage.problem, stage.segmentations, stage.content);
+    const AffineMotion fitted =
+        fit_affine_motion(stage.problem.base_welded.data(), stage.problem.trajectories, chosen, 1);
+    stage.content.cluster_count = uint32_t(chosen.count);
+    stage.content.labels = chosen.label;
+    std::vector<FrameSequence> restored = stage.clips;
+    std::vector<uint8_t> loop_stream;
+    std::shared_ptr<const TransformPrelude> prelude;
+    int calls = 0;
+    code_stream(stage.problem, chosen, fitted, stage.content, stage.report, loop_stream, restored,
+                [&](const StreamContent& steps_chosen) {
+                  ++calls;
+                  prelude = transform_prelude(stage.problem, steps_chosen);
+                });
+    ASSERT_EQ(calls, 1);
+    ASSERT_NE(prelude, nullptr);
+    const double squared = squared_error(stage.clips, restored);
+    for (double budget : {squared, squared / 16, squared / 256}) {
+      SCOPED_TRACE(budget);
+      std::vector<uint8_t> with, without;
+      StreamSizes sizes;
+      const bool made_with = try_transform_stream(stage.problem, stage.content, budget, with, sizes, prelude.get());
+      const bool made_without = try_transform_stream(stage.problem, stage.content, budget, without, sizes);
+      EXPECT_EQ(made_with, made_without);
+      EXPECT_TRUE(made_with || budget < squared);
+      EXPECT_EQ(with, without);
+    }
+  }
 }
 
 TEST(TransformCoding, SaysWhenNoStreamMeetsTheBudget) {

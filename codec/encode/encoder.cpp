@@ -3,8 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 
+#include "common/parallel.h"
 #include "common/reconstruction.h"
 #include "common/stream_format.h"
 #include "common/topology.h"
@@ -31,6 +35,11 @@ namespace {
 // whose vertices all sit on one point while it moves, when the scale was the base mesh's diagonal, 0).
 // Quantized motion coefficients are clamped too (motion_quantization.cpp).
 constexpr int kFinestStepBits = 24;
+
+// The transform's prelude (transform_prelude) is made beside the residual loop's coding, with more than one thread,
+// when its rows take at most this many bytes; beyond, after it, as the transform's first step: the residual symbols
+// (as large as the frames) are freed by then, and the two would otherwise be held at once.
+constexpr uint64_t kPreludeBytes = uint64_t(256) << 20;
 
 Status check_input(const std::vector<FrameSequence>& clips, const std::vector<float>& base) {
   if (clips.empty()) return Status(StatusCode::invalid_argument, "no clips to encode");
@@ -157,8 +166,8 @@ std::vector<FrameSequence> shaped_like(const std::vector<FrameSequence>& clips) 
 
 // Version 4: the residual loop's stream replaced by the transform section's where that is smaller at no more squared
 // error (transform_coding.h), or with gpu_playable always (failing where there is none). Takes the content over.
-Status try_transform(const EncodeProblem& problem, StreamContent&& content, std::vector<uint8_t>& stream,
-                     std::vector<FrameSequence>& restored, StreamReport& report) {
+Status try_transform(const EncodeProblem& problem, StreamContent&& content, const TransformPrelude* prelude,
+                     std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored, StreamReport& report) {
   const auto start = EncodeClock::now();
   report_progress(problem.settings, "transform residuals");
   std::vector<uint8_t> candidate;
@@ -167,7 +176,7 @@ Status try_transform(const EncodeProblem& problem, StreamContent&& content, std:
   const double budget = squared_error(problem.clips, restored);
   bool made;
   if (!required) {
-    made = try_transform_stream(problem, std::move(content), budget, candidate, sizes);
+    made = try_transform_stream(problem, std::move(content), budget, candidate, sizes, prelude);
   } else {
     // transform_content drops the residual symbols (as large as the frames): without them, copies are small.
     content.residuals = std::vector<int64_t>();
@@ -175,11 +184,16 @@ Status try_transform(const EncodeProblem& problem, StreamContent&& content, std:
     // First as without the setting (a primitive that gets version 4 anyway gets the same stream); else at the error
     // target (the residual loop may have come closer to the frames, or to zero error), then tighter: a stream of
     // almost no residuals can be shorter than the format allows for its vertex frames (kMaxVertexFramesPerByte).
-    made = try_transform_stream(problem, content, budget, candidate, sizes);
+    std::shared_ptr<const TransformPrelude> own_prelude;
+    if (prelude == nullptr) {  // made once for every try below
+      own_prelude = transform_prelude(problem, content);
+      prelude = own_prelude.get();
+    }
+    made = try_transform_stream(problem, content, budget, candidate, sizes, prelude);
     const double target = frame_spread(problem.clips) * std::pow(problem.settings.target / 100.0, 2);
     for (int tighter = 0; !made && tighter < 5; ++tighter)
       made = try_transform_stream(problem, content, std::max(budget, target) * std::pow(1.0 / 16, tighter), candidate,
-                               sizes);
+                                  sizes, prelude);
   }
   if (required && !made)
     return Status(StatusCode::unsupported,
@@ -250,13 +264,21 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   report.ms_segmentation = milliseconds_since(start);
 
   // Motion and residual steps, residual symbols, the stream; the decoder's frames and their KG error.
+  // The transform's budget is the residual loop's error, but what it first finds depends on the motion alone: that is
+  // made while the residual loop codes its symbols (unless its rows would take more than kPreludeBytes).
   std::vector<FrameSequence> restored = shaped_like(clips);
-  code_stream(problem, clusters, fitted, content, report, stream, restored);
+  const bool transform = settings.transform_residuals && settings.mode == RateMode::error && !settings.table_residuals;
+  std::shared_ptr<const TransformPrelude> prelude;
+  std::function<void(const StreamContent&)> beside;
+  if (transform && thread_count(settings.threads) > 1 &&
+      uint64_t(problem.welded) * 3 * problem.frames_total * sizeof(float) <= kPreludeBytes)
+    beside = [&](const StreamContent& steps_chosen) { prelude = transform_prelude(problem, steps_chosen); };
+  code_stream(problem, clusters, fitted, content, report, stream, restored, beside);
   ErrorAccumulator accumulator;
   for (size_t c = 0; c < clips.size(); ++c) accumulator.add(clips[c], restored[c]);
   report.kg_percent = accumulator.result().kg_percent;
-  if (settings.transform_residuals && settings.mode == RateMode::error && !settings.table_residuals)
-    SEGMORPH_RETURN_IF_ERROR(try_transform(problem, std::move(content), stream, restored, report));
+  if (transform)
+    SEGMORPH_RETURN_IF_ERROR(try_transform(problem, std::move(content), prelude.get(), stream, restored, report));
   content = StreamContent();  // its residual symbols are as large as the frames
   if (reconstruction) *reconstruction = std::move(restored);
   if (report_out) *report_out = report;

@@ -59,7 +59,8 @@ class RateControlDriver {
   // The motion and residual steps, as the target mode asks.
   void choose_steps();
   // The residual symbols for the chosen steps and the stream (with a rate target, re-encoded until it lands on it).
-  void encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored);
+  void encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored,
+              const std::function<void(const StreamContent&)>& beside);
 
  private:
   void extend(const std::vector<double> (&candidates)[3]);
@@ -482,9 +483,20 @@ void RateControlDriver::encode_residuals(std::vector<uint8_t>& stream, std::vect
   write_stream(content_, p_.base, stream, &sizes_);
 }
 
-void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored) {
+void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored,
+                               const std::function<void(const StreamContent&)>& beside) {
   const auto start = EncodeClock::now();
-  encode_residuals(stream, restored);
+  if (beside) {
+    const StreamContent chosen = content_;
+    parallel_items(2, thread_count(settings_.threads), [&](size_t item) {
+      if (item == 0)
+        encode_residuals(stream, restored);
+      else
+        beside(chosen);
+    });
+  } else {
+    encode_residuals(stream, restored);
+  }
   if (settings_.mode == RateMode::lossless && (content_.flags & format::kFlagFrameReferences)) {
     // A lossless stream has no rate control to estimate by: it is written with and without the references, and the
     // smaller kept (both reconstruct the frames exactly).
@@ -524,10 +536,11 @@ void RateControlDriver::encode(std::vector<uint8_t>& stream, std::vector<FrameSe
 
 void code_stream(const EncodeProblem& problem, const Clusters& clusters, const AffineMotion& fitted,
                  StreamContent& content, StreamReport& report, std::vector<uint8_t>& stream,
-                 std::vector<FrameSequence>& restored) {
+                 std::vector<FrameSequence>& restored,
+                 const std::function<void(const StreamContent& chosen)>& beside) {
   RateControlDriver driver(problem, clusters, fitted, content, report);
   driver.choose_steps();
-  driver.encode(stream, restored);
+  driver.encode(stream, restored, beside);
 }
 
 }  // namespace segmorph

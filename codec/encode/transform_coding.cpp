@@ -4,7 +4,12 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <future>
+#include <memory>
+#include <optional>
+#include <system_error>
 #include <unordered_map>
+#include <utility>
 
 #include "common/frame_sequence.h"
 #include "common/parallel.h"
@@ -121,18 +126,35 @@ std::vector<size_t> basis_sizes(size_t most) {
 // kCappedBasisFrom), and whether that cap kept fewer than the energy would into *capped; the first vectors are then
 // those of an uncapped basis that also finds them one by one.
 //
-// pca_basis_of_scaled takes the rows already scaled by the square roots of their weights.
-Matrix pca_basis_of_scaled(const Eigen::MatrixXd& scaled, double negligible, bool* capped = nullptr) {
-  const bool dual = scaled.rows() < scaled.cols();
+// pca_problem takes the rows already scaled by the square roots of their weights: the eigenproblem, which depends on
+// the rows alone; pca_basis_of its vectors for a `negligible` energy (and `capped`), as often as asked.
+struct PcaProblem {
+  bool dual = false;
+  Eigen::MatrixXd scaled;  // dual form only: the rows, to take the vectors back through
+  std::unique_ptr<LargestEigenvectors> solver;
+  Eigen::Index columns = 0;
+};
+
+PcaProblem pca_problem(Eigen::MatrixXd&& scaled) {
+  PcaProblem out;
+  out.dual = scaled.rows() < scaled.cols();
+  out.columns = scaled.cols();
   // The Gram matrix's lower triangle only (the solver reads no more): half the products of a full one.
-  const Eigen::Index n = dual ? scaled.rows() : scaled.cols();
+  const Eigen::Index n = out.dual ? scaled.rows() : scaled.cols();
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(n, n);
-  if (dual)
+  if (out.dual)
     gram.selfadjointView<Eigen::Lower>().rankUpdate(scaled);
   else
     gram.selfadjointView<Eigen::Lower>().rankUpdate(scaled.transpose());
-  const LargestEigenvectors solver(gram);
+  out.solver = std::make_unique<LargestEigenvectors>(gram);
+  if (out.dual) out.scaled = std::move(scaled);
+  return out;
+}
+
+Matrix pca_basis_of(const PcaProblem& problem, double negligible, bool* capped = nullptr) {
+  const LargestEigenvectors& solver = *problem.solver;
   const Eigen::VectorXd& values = solver.values();  // ascending
+  const Eigen::Index n = values.size();
   const double largest = std::max(values.maxCoeff(), 0.0);
   double left = std::max(values.sum(), 0.0);
   Eigen::Index kept = 0;
@@ -144,9 +166,10 @@ Matrix pca_basis_of_scaled(const Eigen::MatrixXd& scaled, double negligible, boo
     kept = std::min(kept, most);
   }
   const Eigen::MatrixXd vectors = solver.vectors(kept);
-  Matrix basis(kept, scaled.cols());
+  Matrix basis(kept, problem.columns);
   for (Eigen::Index j = 0; j < kept; ++j) {
-    Eigen::VectorXd vector = dual ? Eigen::VectorXd(scaled.transpose() * vectors.col(j)) : vectors.col(j);
+    Eigen::VectorXd vector =
+        problem.dual ? Eigen::VectorXd(problem.scaled.transpose() * vectors.col(j)) : Eigen::VectorXd(vectors.col(j));
     vector /= vector.norm();
     basis.row(j) = vector.transpose();
   }
@@ -156,7 +179,7 @@ Matrix pca_basis_of_scaled(const Eigen::MatrixXd& scaled, double negligible, boo
 Matrix pca_basis(const Matrix& rows, const std::vector<double>& weight, double negligible) {
   Eigen::MatrixXd scaled = rows;
   for (Eigen::Index r = 0; r < rows.rows(); ++r) scaled.row(r) *= std::sqrt(weight[size_t(r)]);
-  return pca_basis_of_scaled(scaled, negligible);
+  return pca_basis_of(pca_problem(std::move(scaled)), negligible);
 }
 
 struct Option {
@@ -450,21 +473,71 @@ bool fit_coefficients(const EncodeProblem& problem, const StreamContent& content
   return true;
 }
 
-}  // namespace
-
-bool try_transform_stream(const EncodeProblem& problem, StreamContent content, double budget,
-                          std::vector<uint8_t>& stream, StreamSizes& sizes) {
-  const size_t welded = content.welded_count, frames = content.frame_count(), clusters = content.cluster_count;
-  if (frames > kMaxTransformFrames || !(budget > 0)) return false;
-  // What every candidate shares: the content without the residual loop (its symbols are as large as the frames).
+// What every candidate shares: the content without the residual loop (its symbols are as large as the frames).
+void as_transform_content(StreamContent& content) {
   content.flags &= uint8_t(~format::kResidualLoopFlags);
   content.transform = true;
   content.residuals = std::vector<int64_t>();
   content.narrow_residuals = std::vector<int32_t>();
   for (float& step : content.residual_step) step = 0;
-  const Rows rows = residual_rows(problem, content);
-  std::vector<double> weight(welded * 3);
-  for (size_t i = 0; i < weight.size(); ++i) weight[i] = double(problem.multiplicity[i / 3]);
+}
+
+}  // namespace
+
+struct TransformPrelude {
+  Rows rows;                   // residual_rows
+  std::vector<double> weight;  // each row's: its welded vertex's multiplicity
+  // The stream basis's eigenproblem, when made ahead: last, so that it is destroyed first (std::async's state waits for
+  // its thread, which reads the rows).
+  std::shared_future<PcaProblem> stream;
+
+  // The rows and weights of a content as_transform_content made.
+  TransformPrelude(const EncodeProblem& problem, const StreamContent& content)
+      : rows(residual_rows(problem, content)), weight(size_t(content.welded_count) * 3) {
+    for (size_t i = 0; i < weight.size(); ++i) weight[i] = double(problem.multiplicity[i / 3]);
+  }
+
+  // The stream basis's eigenproblem: of at most most_rows evenly spaced rows, gathered straight into their scaled
+  // doubles (the same values gather() and pca_basis() make: one copy, not two).
+  PcaProblem stream_problem(size_t most_rows) const {
+    std::vector<Eigen::Index> all(size_t(rows.rows()));
+    for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
+    const std::vector<Eigen::Index> which = sample(all, most_rows);
+    const double scale = double(all.size()) / double(which.size());
+    Eigen::MatrixXd scaled(Eigen::Index(which.size()), rows.cols());
+    for (size_t i = 0; i < which.size(); ++i)
+      scaled.row(Eigen::Index(i)) = rows.row(which[i]).cast<double>() * std::sqrt(weight[size_t(which[i])] * scale);
+    return pca_problem(std::move(scaled));
+  }
+};
+
+std::shared_ptr<const TransformPrelude> transform_prelude(const EncodeProblem& problem, StreamContent content) {
+  if (content.frame_count() > kMaxTransformFrames) return nullptr;
+  as_transform_content(content);
+  auto prelude = std::make_shared<TransformPrelude>(problem, content);
+  auto make = [prelude = prelude.get(), most_rows = problem.settings.transform_sample_rows] {
+    return prelude->stream_problem(most_rows);
+  };
+  try {
+    prelude->stream = std::async(std::launch::async, make).share();
+  } catch (const std::system_error&) {  // no thread to start: made where it is first needed
+    prelude->stream = std::async(std::launch::deferred, make).share();
+  }
+  return prelude;
+}
+
+bool try_transform_stream(const EncodeProblem& problem, StreamContent content, double budget,
+                          std::vector<uint8_t>& stream, StreamSizes& sizes, const TransformPrelude* prelude) {
+  const size_t welded = content.welded_count, frames = content.frame_count(), clusters = content.cluster_count;
+  if (frames > kMaxTransformFrames || !(budget > 0)) return false;
+  as_transform_content(content);
+  std::shared_ptr<const TransformPrelude> own_prelude;
+  if (prelude == nullptr) {
+    own_prelude = std::make_shared<TransformPrelude>(problem, content);
+    prelude = own_prelude.get();
+  }
+  const Rows& rows = prelude->rows;
+  const std::vector<double>& weight = prelude->weight;
   const double unit = std::sqrt(12 * budget / (3.0 * double(content.vertex_count) * double(frames)));
   const double bits_per_vector = double(frames) * kEstimatedBitsPerEntry + 32;
   const double negligible = budget * 1e-4;  // energy a cluster may leave in vectors not tried
@@ -508,17 +581,13 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
     return out;
   };
   const size_t threads = thread_count(problem.settings.threads);
+  // The stream basis's eigenproblem: the prelude's (waited for), else made here once (the uncapped basis reads it
+  // again).
+  std::optional<PcaProblem> stream_problem;
   auto find_stream_basis = [&](bool capped) {
-    std::vector<Eigen::Index> all(welded * 3);
-    for (size_t i = 0; i < all.size(); ++i) all[i] = Eigen::Index(i);
-    const std::vector<Eigen::Index> which = sample(all, most_rows);
-    // Gathered straight into the scaled rows (the same values as gather() and pca_basis() make: one copy, not two).
-    const double scale = double(all.size()) / double(which.size());
-    Eigen::MatrixXd scaled(Eigen::Index(which.size()), rows.cols());
-    for (size_t i = 0; i < which.size(); ++i)
-      scaled.row(Eigen::Index(i)) =
-          rows.row(which[i]).cast<double>() * std::sqrt(weight[size_t(which[i])] * scale);
-    stream_basis = pca_basis_of_scaled(scaled, negligible, capped ? &stream_capped : nullptr);
+    if (!prelude->stream.valid() && !stream_problem) stream_problem.emplace(prelude->stream_problem(most_rows));
+    stream_basis = pca_basis_of(prelude->stream.valid() ? prelude->stream.get() : *stream_problem, negligible,
+                                capped ? &stream_capped : nullptr);
   };
   parallel_items(clusters + 1, threads, [&](size_t item) {
     if (item == 0) {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "common/frame_sequence.h"
@@ -20,8 +21,16 @@ namespace segmorph {
 // are estimated from at most settings.transform_sample_rows rows of each cluster (whole vertices, evenly spaced); every
 // row's coefficients are fitted, and the error is the decoder's frames'. Returns whether it made one: false, leaving
 // the outputs undefined, when there is none (too many frames, vectors or coefficients for the format, or the budget
-// not met).
+// not met). `prelude`, if any, is transform_prelude's of the same content.
+struct TransformPrelude;
 bool try_transform_stream(const EncodeProblem& problem, StreamContent content, double budget,
-                          std::vector<uint8_t>& stream, StreamSizes& sizes);
+                          std::vector<uint8_t>& stream, StreamSizes& sizes, const TransformPrelude* prelude = nullptr);
+
+// What try_transform_stream first finds of `content` (the residual loop's, its steps chosen), which depends on its
+// motion alone, not on the budget: the residual rows (W × 3 × F floats), then the stream basis's eigenproblem on a
+// thread of its own, which try_transform_stream waits for where it needs it (its clusters' own bases go on meanwhile).
+// Made while the residual loop codes its symbols (code_stream's `beside`), and handed to each try_transform_stream of
+// that content: the same stream as without it. Null where no transform is tried (too many frames).
+std::shared_ptr<const TransformPrelude> transform_prelude(const EncodeProblem& problem, StreamContent content);
 
 }  // namespace segmorph
