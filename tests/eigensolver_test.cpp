@@ -6,8 +6,10 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <mutex>
 #include <random>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -308,30 +310,41 @@ TEST(Eigensolver, ComponentCountIsClampedToTheComponentSize) {
   EXPECT_NEAR(lone.vectors(0, 0), 1 / std::sqrt(laplacian.mass[3]), 1e-12 / std::sqrt(laplacian.mass[3]));
 }
 
-// Spheres of 642, 162, 42 and 642 vertices (dense and shift-invert solves), a triangle and a lone vertex.
+// A triangle, spheres of 642, 162, 42 and 642 vertices (dense and shift-invert solves) and a lone vertex: the
+// components' order is not their sizes'.
 WeldedMesh several_components() {
   Mesh triangle, lone;
   triangle.positions = {12, 0, 0, 13, 0, 0, 12, 1, 0};
   triangle.triangles = {0, 1, 2};
   lone.positions = {15, 5, 5};
-  return welded({icosphere(3, 1.0), icosphere(2, 0.7, Eigen::Vector3d(3, 0, 0)),
-                 icosphere(1, 0.4, Eigen::Vector3d(6, 0, 0)), icosphere(3, 0.5, Eigen::Vector3d(9, 0, 0)), triangle,
-                 lone});
+  return welded({triangle, icosphere(3, 1.0), icosphere(2, 0.7, Eigen::Vector3d(3, 0, 0)),
+                 icosphere(1, 0.4, Eigen::Vector3d(6, 0, 0)), icosphere(3, 0.5, Eigen::Vector3d(9, 0, 0)), lone});
 }
 
 TEST(Eigensolver, ComponentsOnThreadsAreEachSolvedAlone) {
   const WeldedMesh mesh = several_components();
   ASSERT_EQ(mesh.topology.component_count, 6u);
-  for (size_t threads : {1, 3}) {
-    SCOPED_TRACE(threads);
+  // With a multilevel limit of 500 the two 642-vertex spheres are solved first, one after the other (multilevel).
+  for (auto [limit, threads] : {std::pair<size_t, size_t>(EigenSettings().multilevel_limit, 1), {EigenSettings().multilevel_limit, 3}, {500, 1},
+                                {500, 3}}) {
+    SCOPED_TRACE(::testing::Message() << limit << " " << threads);
     EigenSettings settings;
     settings.threads = threads;
+    settings.multilevel_limit = limit;
     std::vector<std::string> steps;
-    settings.progress = [&](const std::string& step) { steps.push_back(step); };
+    std::mutex told;
+    bool elsewhere = false;
+    const std::thread::id caller = std::this_thread::get_id();
+    settings.progress = [&](const std::string& step) {
+      const std::lock_guard<std::mutex> lock(told);
+      steps.push_back(step);
+      elsewhere = elsewhere || std::this_thread::get_id() != caller;
+    };
     ComponentSpectra spectra;
     ASSERT_TRUE(component_spectra(mesh.laplacian, mesh.topology, 12, spectra, settings).ok());
     ASSERT_EQ(spectra.components.size(), 6u);
     EXPECT_FALSE(steps.empty());  // the largest component is the calling thread's
+    EXPECT_FALSE(elsewhere);      // and only its steps are told
     for (const ComponentSpectrum& component : spectra.components) {
       // The reference: the component's own operator, solved alone on this thread.
       const Eigen::Index n = Eigen::Index(component.vertices.size());
@@ -344,8 +357,10 @@ TEST(Eigensolver, ComponentsOnThreadsAreEachSolvedAlone) {
       stiffness.setFromTriplets(entries.begin(), entries.end());
       Eigen::VectorXd mass(n);
       for (Eigen::Index i = 0; i < n; ++i) mass[i] = mesh.laplacian.mass[component.vertices[size_t(i)]];
+      EigenSettings reference;
+      reference.multilevel_limit = limit;
       Eigenpairs alone;
-      ASSERT_TRUE(smallest_eigenpairs(stiffness, mass, 12, alone).ok());
+      ASSERT_TRUE(smallest_eigenpairs(stiffness, mass, 12, alone, reference).ok());
       ASSERT_EQ(component.eigenpairs.values.size(), alone.values.size());
       ASSERT_EQ(component.eigenpairs.vectors.size(), alone.vectors.size());
       EXPECT_EQ(0, std::memcmp(component.eigenpairs.values.data(), alone.values.data(),
@@ -354,15 +369,15 @@ TEST(Eigensolver, ComponentsOnThreadsAreEachSolvedAlone) {
                                sizeof(double) * size_t(alone.vectors.size())));
     }
   }
-  // Failures: the first in component order is the one told, whichever thread met it first. Forced shift-invert
-  // cannot find 100 pairs of the 42-, 3- and 1-vertex components.
+  // Failures: the first in component order is the one told (the triangle, handed out after the larger ones), whichever
+  // thread met it first. Forced shift-invert cannot find 100 pairs of the 3-, 42- and 1-vertex components.
   EigenSettings forced;
   forced.method = EigenMethod::shift_invert;
   forced.threads = 3;
   ComponentSpectra spectra;
   const Status status = component_spectra(mesh.laplacian, mesh.topology, 100, spectra, forced);
   EXPECT_EQ(status.code(), StatusCode::invalid_argument);
-  EXPECT_EQ(status.message().rfind("component 2 of 6: ", 0), 0u) << status.message();
+  EXPECT_EQ(status.message().rfind("component 0 of 6: ", 0), 0u) << status.message();
 }
 
 TEST(Eigensolver, MeshWithDegenerateTrianglesStillSolves) {

@@ -1,5 +1,6 @@
 // The version-4 transform coding of the residuals (codec/encode/transform_coding.h): temporal bases and coefficients
 // that meet a squared-error budget, checked on the decoder's frames.
+#include <algorithm>
 #include <memory>
 #include <random>
 #include <vector>
@@ -106,12 +107,14 @@ TEST(TransformCoding, FindsTheStreamBasisAgainWhenAChoiceReachesItsCap) {
 
 // The prelude made beside the residual loop's coding (code_stream's `beside`, as encode_animation makes it) gives
 // each budget's stream the same bytes as none, once handed to several tries; also where the uncapped stream basis
-// is found again from it (the signals' clip).
+// is found again from it (the signals' clip). On two threads, as the encoder makes it: the residual coding and the
+// prelude side by side, and the stream basis's eigenproblem on a thread of its own.
 TEST(TransformCoding, APreludeGivesTheSameStreamsAsNone) {
   for (bool signals : {false, true}) {
     SCOPED_TRACE(signals);
     CodecSettings settings;
     settings.clusters = signals ? 16 : 0;
+    settings.threads = 2;
     StageProblem stage = signals ? StageProblem(signals_clip(), settings) : StageProblem(48, settings);
     const Clusters chosen = choose_clusters(stage.problem, stage.segmentations, stage.content);
     const AffineMotion fitted =
@@ -125,11 +128,12 @@ TEST(TransformCoding, APreludeGivesTheSameStreamsAsNone) {
     code_stream(stage.problem, chosen, fitted, stage.content, stage.report, loop_stream, restored,
                 [&](const StreamContent& steps_chosen) {
                   ++calls;
-                  prelude = transform_prelude(stage.problem, steps_chosen);
+                  prelude = transform_prelude(stage.problem, steps_chosen, true);
                 });
     ASSERT_EQ(calls, 1);
     ASSERT_NE(prelude, nullptr);
     const double squared = squared_error(stage.clips, restored);
+    size_t most_stream_vectors = 0;
     for (double budget : {squared, squared / 16, squared / 256}) {
       SCOPED_TRACE(budget);
       std::vector<uint8_t> with, without;
@@ -139,6 +143,12 @@ TEST(TransformCoding, APreludeGivesTheSameStreamsAsNone) {
       EXPECT_EQ(made_with, made_without);
       EXPECT_TRUE(made_with || budget < squared);
       EXPECT_EQ(with, without);
+      StreamContent content;
+      if (made_with && read_stream(with.data(), with.size(), stage.base, content).ok())
+        most_stream_vectors = std::max(most_stream_vectors, content.stream_basis.step.size());
+    }
+    if (signals) {
+      EXPECT_GT(most_stream_vectors, kFrames / 4);  // beyond the cap: the uncapped basis was found
     }
   }
 }

@@ -205,11 +205,12 @@ function threadSpeedups(speed, print, flags) {
         'and the median run\'s stage times summed over the files, and the speedup (one thread\'s time over every ' +
         'core\'s). The output is the same bytes for every thread count: the harness compares the two files of each input ' +
         'and flags any that differ. The work that splits over threads (`segmorph encode --help`, --threads): the ' +
-        'cluster count\'s candidates, the per-frame motion fits, the motion refinement\'s vertex moves and the ' +
-        'cluster weights, each frame\'s reference, the rate control\'s measurements, the version-4 bases, the ' +
-        'decodes of version-4 frames, the Draco coding of rigid meshes, and the comparison with the input (its nodes, ' +
-        'vertex pairing and rigid meshes); the heat-diffusion eigenpairs of a mesh part below 60,000 vertices and the ' +
-        'writing of each stream run on one.');
+        'heat-diffusion eigenpairs of a mesh\'s connected parts (side by side), the cluster count\'s candidates, the ' +
+        'per-frame motion fits, the motion refinement\'s vertex moves and the cluster weights, each frame\'s ' +
+        'reference, the rate control\'s measurements and its motion step trials, the version-4 bases (the stream\'s ' +
+        'beside the residual coding), the decodes of version-4 frames, the Draco coding of rigid meshes, and the ' +
+        'comparison with the input (its nodes, vertex pairing and rigid meshes); the eigenpairs of one connected part ' +
+        'below 60,000 vertices, the residual coding and the writing of each stream run on one.');
   print();
   const groups = [['sequences', measured.filter((f) => f.label.startsWith('sequences/'))], ['every file', measured]];
   print(`| stage | ${groups.map(([name]) => `${name}: 1 thread | ${cores} threads | speedup`).join(' | ')} |`);

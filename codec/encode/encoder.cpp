@@ -166,8 +166,10 @@ std::vector<FrameSequence> shaped_like(const std::vector<FrameSequence>& clips) 
 
 // Version 4: the residual loop's stream replaced by the transform section's where that is smaller at no more squared
 // error (transform_coding.h), or with gpu_playable always (failing where there is none). Takes the content over.
-Status try_transform(const EncodeProblem& problem, StreamContent&& content, const TransformPrelude* prelude,
-                     std::vector<uint8_t>& stream, std::vector<FrameSequence>& restored, StreamReport& report) {
+// `prelude`: transform_prelude's of the content, if made; released once the tries are done.
+Status try_transform(const EncodeProblem& problem, StreamContent&& content,
+                     std::shared_ptr<const TransformPrelude> prelude, std::vector<uint8_t>& stream,
+                     std::vector<FrameSequence>& restored, StreamReport& report) {
   const auto start = EncodeClock::now();
   report_progress(problem.settings, "transform residuals");
   std::vector<uint8_t> candidate;
@@ -176,7 +178,7 @@ Status try_transform(const EncodeProblem& problem, StreamContent&& content, cons
   const double budget = squared_error(problem.clips, restored);
   bool made;
   if (!required) {
-    made = try_transform_stream(problem, std::move(content), budget, candidate, sizes, prelude);
+    made = try_transform_stream(problem, std::move(content), budget, candidate, sizes, prelude.get());
   } else {
     // transform_content drops the residual symbols (as large as the frames): without them, copies are small.
     content.residuals = std::vector<int64_t>();
@@ -184,17 +186,15 @@ Status try_transform(const EncodeProblem& problem, StreamContent&& content, cons
     // First as without the setting (a primitive that gets version 4 anyway gets the same stream); else at the error
     // target (the residual loop may have come closer to the frames, or to zero error), then tighter: a stream of
     // almost no residuals can be shorter than the format allows for its vertex frames (kMaxVertexFramesPerByte).
-    std::shared_ptr<const TransformPrelude> own_prelude;
-    if (prelude == nullptr) {  // made once for every try below
-      own_prelude = transform_prelude(problem, content);
-      prelude = own_prelude.get();
-    }
-    made = try_transform_stream(problem, content, budget, candidate, sizes, prelude);
+    if (prelude == nullptr)  // made once for every try below
+      prelude = transform_prelude(problem, content, thread_count(problem.settings.threads) > 1);
+    made = try_transform_stream(problem, content, budget, candidate, sizes, prelude.get());
     const double target = frame_spread(problem.clips) * std::pow(problem.settings.target / 100.0, 2);
     for (int tighter = 0; !made && tighter < 5; ++tighter)
       made = try_transform_stream(problem, content, std::max(budget, target) * std::pow(1.0 / 16, tighter), candidate,
-                                  sizes, prelude);
+                                  sizes, prelude.get());
   }
+  prelude.reset();
   if (required && !made)
     return Status(StatusCode::unsupported,
                   "no GPU-playable (version-4) stream reaches the error target within the format's limits (2048 "
@@ -272,13 +272,13 @@ Status encode_animation(const std::vector<FrameSequence>& clips, const std::vect
   std::function<void(const StreamContent&)> beside;
   if (transform && thread_count(settings.threads) > 1 &&
       uint64_t(problem.welded) * 3 * problem.frames_total * sizeof(float) <= kPreludeBytes)
-    beside = [&](const StreamContent& steps_chosen) { prelude = transform_prelude(problem, steps_chosen); };
+    beside = [&](const StreamContent& steps_chosen) { prelude = transform_prelude(problem, steps_chosen, true); };
   code_stream(problem, clusters, fitted, content, report, stream, restored, beside);
   ErrorAccumulator accumulator;
   for (size_t c = 0; c < clips.size(); ++c) accumulator.add(clips[c], restored[c]);
   report.kg_percent = accumulator.result().kg_percent;
   if (transform)
-    SEGMORPH_RETURN_IF_ERROR(try_transform(problem, std::move(content), prelude.get(), stream, restored, report));
+    SEGMORPH_RETURN_IF_ERROR(try_transform(problem, std::move(content), std::move(prelude), stream, restored, report));
   content = StreamContent();  // its residual symbols are as large as the frames
   if (reconstruction) *reconstruction = std::move(restored);
   if (report_out) *report_out = report;

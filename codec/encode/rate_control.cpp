@@ -333,7 +333,6 @@ void RateControlDriver::choose_motion_step_ratio() {
     std::unique_ptr<FramePredictions> predictions;
     size_t side_bytes = 0;
     SubbandCurve curves[3];
-    double ms_motion = 0, ms_prediction = 0;
   };
   constexpr size_t kTrials = std::size(kMotionStepRatioTrials);
   std::vector<Trial> trials(kTrials);
@@ -351,15 +350,11 @@ void RateControlDriver::choose_motion_step_ratio() {
   for (std::atomic<double>& fraction : walked) fraction.store(0, std::memory_order_relaxed);
   parallel_items(kTrials, threads, [&](size_t t) {
     Trial& trial = trials[t];
-    auto start = EncodeClock::now();
     trial.content = content_;
     quantize_motion(kMotionStepRatioTrials[t] * guess, trial.content, share);
     choose_motion_coding(trial.content, share);
     trial.side_bytes = side_bytes_of(trial.content);
-    trial.ms_motion = milliseconds_since(start);
-    start = EncodeClock::now();
     trial.predictions = std::make_unique<FramePredictions>(trial.content, p_.base_welded);
-    trial.ms_prediction = milliseconds_since(start);
     const bool calling = std::this_thread::get_id() == caller;
     const std::function<void(double)> progress = [&, t, calling](double fraction) {
       walked[t].store(fraction, std::memory_order_relaxed);
@@ -372,17 +367,14 @@ void RateControlDriver::choose_motion_step_ratio() {
                      trial.curves, share, progress);
   });
   report_progress(settings_, stage, 1);
-  double ms_trials = milliseconds_since(begin);
+  report_.ms_rate_control += milliseconds_since(begin);  // the trials' motion and predictions included
   size_t best = kTrials;  // kTrials: the first
   for (size_t t = 0; t < kTrials; ++t) {
-    report_.ms_motion += trials[t].ms_motion, report_.ms_prediction += trials[t].ms_prediction;
-    ms_trials -= trials[t].ms_motion + trials[t].ms_prediction;
     const StepChoice trial = steps_for_distortion(trials[t].curves, p_.max_distortion());
     const double bytes = double(trials[t].side_bytes) + trial.bits / 8;
     if (trial.distortion <= p_.max_distortion() && bytes < best_bytes)
       best_bytes = bytes, best = t;
   }
-  report_.ms_rate_control += std::max(ms_trials, 0.0);
   if (best == kTrials) {
     choice_ = first;  // already refined
   } else {

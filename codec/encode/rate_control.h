@@ -17,8 +17,9 @@ namespace segmorph {
 // Codes `content` (its clusters and labels set; `fitted`: their motion, unquantized) into `stream`: quantized motion
 // and weights, residual steps, residual symbols. `restored` (the clips' shape, their positions sized) receives the
 // frames a decoder will produce, in the clips' vertex order; `report` the steps, sizes and stage times. `beside`, if
-// any, is called with a copy of the content once its steps are chosen, on another thread (when there is more than
-// one) while the residual symbols are coded: for work that depends on the motion alone; it must not report progress.
+// any, is called with a copy of the content once its steps are chosen, while the residual symbols are coded (on
+// another thread where one starts in time, else after them on this one): for work that depends on the motion alone;
+// it must not report progress.
 void code_stream(const EncodeProblem& problem, const Clusters& clusters, const AffineMotion& fitted,
                  StreamContent& content, StreamReport& report, std::vector<uint8_t>& stream,
                  std::vector<FrameSequence>& restored,

@@ -37,7 +37,7 @@ constexpr int kSteps = 24;
 constexpr double kFinestStep = 0.1, kCoarsestStep = 24;
 // A basis vector's estimated price while choosing: its entries at this many bits each, and its step.
 constexpr double kEstimatedBitsPerEntry = 4;
-// The stream's basis is first found capped (pca_basis) when its eigenproblem is at least this large: choices use few
+// The stream's basis is first found capped (pca_basis_of) when its eigenproblem is at least this large: choices use few
 // of its vectors (at most 27 of the 377 the energy keeps on the chicken), and the uncapped basis, its projections and
 // options cost a third of the encode there.
 constexpr Eigen::Index kCappedBasisFrom = 64;
@@ -511,7 +511,8 @@ struct TransformPrelude {
   }
 };
 
-std::shared_ptr<const TransformPrelude> transform_prelude(const EncodeProblem& problem, StreamContent content) {
+std::shared_ptr<const TransformPrelude> transform_prelude(const EncodeProblem& problem, StreamContent content,
+                                                          bool own_thread) {
   if (content.frame_count() > kMaxTransformFrames) return nullptr;
   as_transform_content(content);
   auto prelude = std::make_shared<TransformPrelude>(problem, content);
@@ -519,7 +520,7 @@ std::shared_ptr<const TransformPrelude> transform_prelude(const EncodeProblem& p
     return prelude->stream_problem(most_rows);
   };
   try {
-    prelude->stream = std::async(std::launch::async, make).share();
+    prelude->stream = std::async(own_thread ? std::launch::async : std::launch::deferred, make).share();
   } catch (const std::system_error&) {  // no thread to start: made where it is first needed
     prelude->stream = std::async(std::launch::deferred, make).share();
   }
@@ -551,7 +552,7 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
   // eigenproblem) and each cluster's own basis and options, then each cluster's options in the stream's basis (which
   // needs it). Larger clusters first, so that no thread is left with a large one at the end. Each cluster's options
   // are then listed as they always are: none, in the stream's basis, in its own. The stream's basis is capped at
-  // first (pca_basis); should a choice reach the cap, the stream's basis and options are found again uncapped, as
+  // first (pca_basis_of); should a choice reach the cap, the stream's basis and options are found again uncapped, as
   // they are where there is no cap, and the choice made again.
   Matrix stream_basis;
   bool stream_capped = false;
@@ -602,6 +603,7 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
     add_options(in_own, own.weight, own.scale, own.total, format::kBasisOwn, unit, bits_per_vector, negligible,
                 own_options[k], own_energy[k]);
   });
+  if (!stream_capped) stream_problem.reset();  // not read again
   auto list_options = [&](size_t item) {
     const size_t k = order[item];
     options[k].clear();
@@ -626,6 +628,7 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
     if (stream_capped && may_want_more(choice, options, stream_energy, size_t(stream_basis.rows()))) {
       stream_capped = false;
       find_stream_basis(false);
+      stream_problem.reset();
       parallel_items(clusters, threads, list_options);
       choice = choose(options, target, basis_size_list, bits_per_vector, threads);
     }

@@ -27,10 +27,12 @@ bool try_transform_stream(const EncodeProblem& problem, StreamContent content, d
                           std::vector<uint8_t>& stream, StreamSizes& sizes, const TransformPrelude* prelude = nullptr);
 
 // What try_transform_stream first finds of `content` (the residual loop's, its steps chosen), which depends on its
-// motion alone, not on the budget: the residual rows (W × 3 × F floats), then the stream basis's eigenproblem on a
-// thread of its own, which try_transform_stream waits for where it needs it (its clusters' own bases go on meanwhile).
-// Made while the residual loop codes its symbols (code_stream's `beside`), and handed to each try_transform_stream of
-// that content: the same stream as without it. Null where no transform is tried (too many frames).
-std::shared_ptr<const TransformPrelude> transform_prelude(const EncodeProblem& problem, StreamContent content);
+// motion alone, not on the budget: the residual rows (W × 3 × F floats), then the stream basis's eigenproblem, with
+// `own_thread` on a thread of its own, which try_transform_stream waits for where it needs it (its clusters' own bases
+// go on meanwhile); without, where it is first needed. Made while the residual loop codes its symbols (code_stream's
+// `beside`), and handed to each try_transform_stream of that content: the same stream as without it. Null where no
+// transform is tried (too many frames).
+std::shared_ptr<const TransformPrelude> transform_prelude(const EncodeProblem& problem, StreamContent content,
+                                                          bool own_thread);
 
 }  // namespace segmorph

@@ -140,10 +140,11 @@ const Option kOptions[] = {
      "restore the sampled frames bit for bit",
      [](CommandLine& line, const std::string&, double) { line.encode.mode = RateMode::lossless; }},
     {"--threads", "-t", "N", kEncode | kDecode, Kind::whole, 0, 1024, false, nullptr, 0,
-     "threads for the work that splits: encode's stages (the eigenvectors of mesh parts above 60,000 vertices, the "
-     "cluster-count search, the motion fits, refinement and cluster weights, each frame's reference, rate control's "
-     "measurements, the version-4 bases, the decodes and the comparison with the input at the end), decode's frames "
-     "of version-4 streams; {range}; "
+     "threads for the work that splits: encode's stages (the eigenvectors of a mesh's connected parts, side by side, "
+     "and of a part above 60,000 vertices, the cluster-count search, the motion fits, refinement and cluster weights, "
+     "each frame's reference, rate control's measurements and motion step trials, the version-4 bases (the stream's "
+     "beside the residual coding), the decodes and the comparison with the input at the end), decode's frames of "
+     "version-4 streams; {range}; "
      "0 (default): every core, shared by the files of a batch that run at once (--jobs). The output is the same "
      "bytes for every N",
      [](CommandLine& line, const std::string&, double number) {

@@ -218,10 +218,11 @@ struct EncodeSettings {
   // the error target fails (UNSUPPORTED). Kept morph targets are coded as without it (they play as morph targets).
   // Error targets only, not with fast_decode or a max_stream_version below 4.
   bool gpu_playable = false;
-  // Threads for the stages that split their work (the heat-diffusion eigenvectors of connected parts above 60,000
-  // vertices, the cluster-count search, the motion fits, refinement and cluster weights, each frame's reference, the
-  // residual steps' measurement of rate control, the version-4 bases, the decodes and the comparison with the input at
-  // the end); 0: every hardware thread. The output is the same bytes for every number.
+  // Threads for the stages that split their work (the heat-diffusion eigenvectors of connected parts, side by side,
+  // and of a part above 60,000 vertices, the cluster-count search, the motion fits, refinement and cluster weights,
+  // each frame's reference, the residual steps' measurement and the motion step trials of rate control, the version-4
+  // bases (the stream's beside the residual coding), the decodes and the comparison with the input at the end); 0:
+  // every hardware thread. The output is the same bytes for every number.
   size_t threads = 0;
 };
 

@@ -472,17 +472,17 @@ Status component_spectra(const CotangentLaplacian& laplacian, const WeldedTopolo
     }
   }
 
-  // The components side by side, larger first (each solve is its own: the pairs do not depend on the threads); the
+  // The components above the multilevel limit one after another, each with every thread (its filter's); then the
+  // others side by side, larger first, each on one (a solve is its own: the pairs do not depend on the threads), the
   // steps told only from the calling thread's. The first failure in component order is the one returned.
-  std::vector<size_t> order(topology.component_count);
-  for (size_t c = 0; c < order.size(); ++c) order[c] = c;
+  std::vector<size_t> large, order;
+  for (size_t c = 0; c < topology.component_count; ++c)
+    (out.components[c].vertices.size() > settings.multilevel_limit ? large : order).push_back(c);
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
     return out.components[a].vertices.size() > out.components[b].vertices.size();
   });
-  std::vector<Status> statuses(order.size(), Status::Ok());
-  const std::thread::id caller = std::this_thread::get_id();
-  parallel_items(order.size(), thread_count(settings.threads), [&](size_t item) {
-    const size_t c = order[item];
+  std::vector<Status> statuses(topology.component_count, Status::Ok());
+  auto solve = [&](size_t c, const EigenSettings& own) {
     ComponentSpectrum& component = out.components[c];
     const Eigen::Index n = Eigen::Index(component.vertices.size());
     SparseMatrix stiffness(n, n);
@@ -490,9 +490,15 @@ Status component_spectra(const CotangentLaplacian& laplacian, const WeldedTopolo
     blocks[c] = {};
     Eigen::VectorXd mass(n);
     for (Eigen::Index i = 0; i < n; ++i) mass[i] = laplacian.mass[component.vertices[size_t(i)]];
-    EigenSettings own = settings;
-    if (std::this_thread::get_id() != caller) own.progress = nullptr;
     statuses[c] = smallest_eigenpairs(stiffness, mass, count, component.eigenpairs, own);
+  };
+  for (size_t c : large) solve(c, settings);
+  const std::thread::id caller = std::this_thread::get_id();
+  parallel_items(order.size(), thread_count(settings.threads), [&](size_t item) {
+    EigenSettings own = settings;
+    own.threads = 1;
+    if (std::this_thread::get_id() != caller) own.progress = nullptr;
+    solve(order[item], own);
   });
   for (size_t c = 0; c < statuses.size(); ++c)
     if (!statuses[c].ok())

@@ -64,8 +64,9 @@ struct EigenSettings {
   size_t coarse_vertices = 20000;
   // multilevel: degree of the Chebyshev filter applied to the carried-back vectors before the Rayleigh–Ritz step.
   int filter_degree = 32;
-  // Threads (0: every hardware thread): component_spectra's components, solved side by side, and multilevel's filter
-  // (it works on blocks of 8 vectors, so at most count / 4 threads have work); the pairs are the same for any number.
+  // Threads (0: every hardware thread): component_spectra's components below multilevel_limit, solved side by side,
+  // and multilevel's filter (it works on blocks of 8 vectors, so at most count / 4 threads have work); the pairs are
+  // the same for any number.
   size_t threads = 1;
   // Spectra's convergence test: each Ritz value ν = 1/(λ − σ) has a residual below tolerance · |ν|.
   double tolerance = 1e-10;
@@ -125,8 +126,9 @@ struct ComponentSpectra {
 };
 
 // The smallest eigenpairs of every connected component of `topology`, each from the rows and columns of
-// `laplacian` (built from the same welded vertices and triangles) that belong to it; the components on up to
-// settings.threads threads, larger first, with `progress` told from the calling thread's only. A component's first
+// `laplacian` (built from the same welded vertices and triangles) that belong to it. Components above
+// settings.multilevel_limit vertices one after another, each with settings.threads for its filter; the others side by
+// side on up to settings.threads threads, larger first, `progress` told from the calling thread's only. A component's first
 // eigenvalue is 0 with a constant eigenvector; a component of one vertex has only that pair.
 Status component_spectra(const CotangentLaplacian& laplacian, const WeldedTopology& topology, size_t count,
                          ComponentSpectra& out, const EigenSettings& settings = EigenSettings());
