@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "encode/segmentation/curvature.h"
 #include "encode/segmentation/laplacian.h"
@@ -97,6 +100,104 @@ TEST(Refinement, LevelMovesToTheWaistOfAClosedSurface) {
     settings.profile = profile;
     const MorseBands refined = refine_levels(positions, mu, curvature, topology, adjacency, bands, settings);
     EXPECT_NEAR(refined.levels[0][0], 0.8, 0.2);
+  }
+}
+
+// The boundary-vertex refinement as first written: every candidate level scans every vertex of its component.
+std::vector<std::vector<double>> levels_by_whole_scans(const std::vector<double>& mu,
+                                                       const std::vector<double>& curvature,
+                                                       const WeldedTopology& topology,
+                                                       const VertexAdjacency& adjacency, MorseBands bands,
+                                                       const RefinementSettings& settings) {
+  const size_t count = topology.welded_count();
+  std::vector<double> low(topology.component_count, INFINITY), high(topology.component_count, -INFINITY);
+  for (size_t w = 0; w < count; ++w) {
+    low[topology.component[w]] = std::min(low[topology.component[w]], mu[w]);
+    high[topology.component[w]] = std::max(high[topology.component[w]], mu[w]);
+  }
+  auto concavity = [&](double level, size_t c) {
+    std::vector<uint32_t> boundary;
+    for (uint32_t v = 0; v < count; ++v) {
+      if (topology.component[v] != c || mu[v] < level) continue;
+      for (uint32_t i = adjacency.offset[v]; i < adjacency.offset[v + 1]; ++i)
+        if (mu[adjacency.neighbour[i]] < level) {
+          boundary.push_back(v);
+          break;
+        }
+    }
+    if (boundary.empty()) return double(INFINITY);
+    std::vector<int> slot(count, -1);
+    std::vector<double> profile(boundary.size());
+    for (size_t b = 0; b < boundary.size(); ++b) slot[boundary[b]] = int(b), profile[b] = curvature[boundary[b]];
+    for (int pass = 0; pass < settings.smoothing; ++pass) {
+      std::vector<double> next(profile.size());
+      for (size_t b = 0; b < boundary.size(); ++b) {
+        double sum = profile[b];
+        int n = 1;
+        for (uint32_t i = adjacency.offset[boundary[b]]; i < adjacency.offset[boundary[b] + 1]; ++i)
+          if (slot[adjacency.neighbour[i]] >= 0) sum += profile[size_t(slot[adjacency.neighbour[i]])], ++n;
+        next[b] = sum / n;
+      }
+      profile = next;
+    }
+    return *std::min_element(profile.begin(), profile.end());
+  };
+  for (int iteration = 0, moved = 1; moved && iteration < settings.max_iterations; ++iteration) {
+    moved = 0;
+    for (size_t c = 0; c < topology.component_count; ++c) {
+      std::vector<double>& levels = bands.levels[c];
+      for (size_t j = 0; j < levels.size(); ++j) {
+        const double below = j > 0 ? levels[j - 1] : low[c], above = j + 1 < levels.size() ? levels[j + 1] : high[c];
+        const double from = levels[j] - settings.window * (levels[j] - below);
+        const double to = levels[j] + settings.window * (above - levels[j]);
+        double best = levels[j], best_score = concavity(best, c);
+        for (int k = 0; k < settings.candidates; ++k) {
+          const double candidate = from + (to - from) * k / std::max(settings.candidates - 1, 1);
+          const double score = concavity(candidate, c);
+          if (score < best_score - 1e-12 * std::fabs(best_score)) best = candidate, best_score = score;
+        }
+        if (best != levels[j]) levels[j] = best, moved = 1;
+      }
+    }
+  }
+  return bands.levels;
+}
+
+// The candidates of a window look only at the vertices that can be on the boundary of a level in it: the levels are
+// those of scanning every vertex for every candidate. Two pinched spheres side by side (two components), μ = x with
+// noise, five levels each, at several windows.
+TEST(Refinement, BoundaryVerticesFromTheWindowsBandAreThoseOfTheWholeComponent) {
+  FrameSequence shape = testing::stretched_sphere(4, 3.0);
+  const size_t one = shape.vertex_count;
+  for (size_t v = 0; v < one; ++v) {
+    const double x = shape.positions[v * 3];
+    const double pinch = 1 - 0.5 * std::exp(-(x - 0.8) * (x - 0.8) / (2 * 0.3 * 0.3));
+    shape.positions[v * 3 + 1] = float(shape.positions[v * 3 + 1] * pinch);
+    shape.positions[v * 3 + 2] = float(shape.positions[v * 3 + 2] * pinch);
+  }
+  const std::vector<uint32_t> triangles = shape.triangles;
+  for (size_t v = 0; v < one; ++v)
+    for (int a = 0; a < 3; ++a) shape.positions.push_back(shape.positions[v * 3 + size_t(a)] + (a == 1 ? 5.0f : 0.0f));
+  for (uint32_t t : triangles) shape.triangles.push_back(t + uint32_t(one));
+  shape.vertex_count = 2 * one;
+  const WeldedTopology topology = weld_topology({shape});
+  ASSERT_EQ(topology.component_count, 2u);
+  const VertexAdjacency adjacency = vertex_adjacency(topology);
+  const std::vector<double> positions = welded_positions(shape.frame(0), topology);
+  const std::vector<double> curvature = minimum_curvature(positions, topology);
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> noise(-0.05, 0.05);
+  std::vector<double> mu;
+  for (size_t w = 0; w < topology.welded_count(); ++w) mu.push_back(positions[w * 3] + noise(random));
+  MorseBands bands;
+  bands.levels = {{-2.0, -1.0, 0.0, 1.0, 2.0}, {-1.5, -0.5, 0.3, 1.2, 2.4}};
+  for (double window : {0.25, 0.5, 0.9}) {
+    SCOPED_TRACE(window);
+    RefinementSettings settings;
+    settings.window = window;
+    const MorseBands refined = refine_levels(positions, mu, curvature, topology, adjacency, bands, settings);
+    EXPECT_EQ(refined.levels, levels_by_whole_scans(mu, curvature, topology, adjacency, bands, settings));
+    EXPECT_NE(refined.levels, bands.levels);  // levels moved
   }
 }
 

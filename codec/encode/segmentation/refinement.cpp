@@ -230,11 +230,20 @@ MorseBands refine_levels(const std::vector<double>& positions, const std::vector
     high[topology.component[w]] = std::max(high[topology.component[w]], mu[w]);
   }
   LevelCurves curves(positions, mu, curvature, settings);
+  // Each vertex's lowest neighbouring μ: a vertex is on the boundary of a level τ when μ ≥ τ and that is below τ, so
+  // the candidates of one window look only at the vertices that are for some τ in it (`band`, in the component's
+  // order: the same boundaries, in the same order, as from every vertex of the component).
+  std::vector<double> lowest_neighbour(topology.welded_count(), INFINITY);
+  for (size_t w = 0; w < topology.welded_count(); ++w)
+    for (uint32_t i = adjacency.offset[w]; i < adjacency.offset[w + 1]; ++i)
+      if (mu[adjacency.neighbour[i]] < lowest_neighbour[w]) lowest_neighbour[w] = mu[adjacency.neighbour[i]];
+  std::vector<uint32_t> band;
   auto concavity = [&](double level, size_t c) {
     if (settings.profile == ConcavityProfile::level_curves) return curves.concavity(level, triangles[c]);
-    return boundary_vertex_concavity(level, members[c], mu, curvature, adjacency, settings.smoothing, slot, boundary,
+    return boundary_vertex_concavity(level, band, mu, curvature, adjacency, settings.smoothing, slot, boundary,
                                      profile);
   };
+  std::vector<double> candidates(size_t(std::max(settings.candidates, 0)));
   int iterations = 0;
   for (bool moved = true; moved && iterations < settings.max_iterations; ++iterations) {
     moved = false;
@@ -244,10 +253,17 @@ MorseBands refine_levels(const std::vector<double>& positions, const std::vector
         const double below = j > 0 ? levels[j - 1] : low[c], above = j + 1 < levels.size() ? levels[j + 1] : high[c];
         const double from = levels[j] - settings.window * (levels[j] - below);
         const double to = levels[j] + settings.window * (above - levels[j]);
-        double best = levels[j];
-        double best_score = concavity(best, c);
+        double best = levels[j], lo = best, hi = best;
         for (int k = 0; k < settings.candidates; ++k) {
-          const double candidate = from + (to - from) * k / std::max(settings.candidates - 1, 1);
+          candidates[size_t(k)] = from + (to - from) * k / std::max(settings.candidates - 1, 1);
+          lo = std::min(lo, candidates[size_t(k)]), hi = std::max(hi, candidates[size_t(k)]);
+        }
+        band.clear();
+        if (settings.profile != ConcavityProfile::level_curves)
+          for (uint32_t v : members[c])
+            if (!(mu[v] < lo) && lowest_neighbour[v] < hi) band.push_back(v);
+        double best_score = concavity(best, c);
+        for (double candidate : candidates) {
           const double score = concavity(candidate, c);
           if (score < best_score - 1e-12 * std::fabs(best_score)) best = candidate, best_score = score;
         }
