@@ -310,7 +310,7 @@ TEST(Eigensolver, ComponentCountIsClampedToTheComponentSize) {
   EXPECT_NEAR(lone.vectors(0, 0), 1 / std::sqrt(laplacian.mass[3]), 1e-12 / std::sqrt(laplacian.mass[3]));
 }
 
-// A triangle, spheres of 642, 162, 42 and 642 vertices (dense and shift-invert solves) and a lone vertex: the
+// A triangle, spheres of 642, 162, 42 and 2562 vertices (dense and shift-invert solves) and a lone vertex: the
 // components' order is not their sizes'.
 WeldedMesh several_components() {
   Mesh triangle, lone;
@@ -318,15 +318,15 @@ WeldedMesh several_components() {
   triangle.triangles = {0, 1, 2};
   lone.positions = {15, 5, 5};
   return welded({triangle, icosphere(3, 1.0), icosphere(2, 0.7, Eigen::Vector3d(3, 0, 0)),
-                 icosphere(1, 0.4, Eigen::Vector3d(6, 0, 0)), icosphere(3, 0.5, Eigen::Vector3d(9, 0, 0)), lone});
+                 icosphere(1, 0.4, Eigen::Vector3d(6, 0, 0)), icosphere(4, 0.5, Eigen::Vector3d(9, 0, 0)), lone});
 }
 
 TEST(Eigensolver, ComponentsOnThreadsAreEachSolvedAlone) {
   const WeldedMesh mesh = several_components();
   ASSERT_EQ(mesh.topology.component_count, 6u);
-  // With a multilevel limit of 500 the two 642-vertex spheres are solved first, one after the other (multilevel).
-  for (auto [limit, threads] : {std::pair<size_t, size_t>(EigenSettings().multilevel_limit, 1), {EigenSettings().multilevel_limit, 3}, {500, 1},
-                                {500, 3}}) {
+  // With a multilevel limit of 2000 the 2562-vertex sphere is solved first, alone (multilevel).
+  const size_t usual = EigenSettings().multilevel_limit;
+  for (auto [limit, threads] : {std::pair<size_t, size_t>(usual, 1), {usual, 3}, {2000, 1}, {2000, 3}}) {
     SCOPED_TRACE(::testing::Message() << limit << " " << threads);
     EigenSettings settings;
     settings.threads = threads;
@@ -345,6 +345,10 @@ TEST(Eigensolver, ComponentsOnThreadsAreEachSolvedAlone) {
     ASSERT_EQ(spectra.components.size(), 6u);
     EXPECT_FALSE(steps.empty());  // the largest component is the calling thread's
     EXPECT_FALSE(elsewhere);      // and only its steps are told
+    if (limit == 2000) {  // the large sphere took the multilevel path
+      EXPECT_NE(std::find(steps.begin(), steps.end(), "eigenpairs: carrying back and filtering (2562 vertices)"),
+                steps.end());
+    }
     for (const ComponentSpectrum& component : spectra.components) {
       // The reference: the component's own operator, solved alone on this thread.
       const Eigen::Index n = Eigen::Index(component.vertices.size());

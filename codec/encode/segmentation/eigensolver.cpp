@@ -472,12 +472,14 @@ Status component_spectra(const CotangentLaplacian& laplacian, const WeldedTopolo
     }
   }
 
-  // The components above the multilevel limit one after another, each with every thread (its filter's); then the
-  // others side by side, larger first, each on one (a solve is its own: the pairs do not depend on the threads), the
-  // steps told only from the calling thread's. The first failure in component order is the one returned.
+  // The components the multilevel method may take (above its limit, unless another method is forced) one after
+  // another, each with every thread (its filter's); then the others side by side, larger first, each on one (a solve
+  // is its own: the pairs do not depend on the threads), the steps told only from the calling thread's. The first
+  // failure in component order is the one returned.
+  const bool filtered = settings.method == EigenMethod::automatic || settings.method == EigenMethod::multilevel;
   std::vector<size_t> large, order;
   for (size_t c = 0; c < topology.component_count; ++c)
-    (out.components[c].vertices.size() > settings.multilevel_limit ? large : order).push_back(c);
+    (filtered && out.components[c].vertices.size() > settings.multilevel_limit ? large : order).push_back(c);
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
     return out.components[a].vertices.size() > out.components[b].vertices.size();
   });

@@ -64,7 +64,7 @@ struct EigenSettings {
   size_t coarse_vertices = 20000;
   // multilevel: degree of the Chebyshev filter applied to the carried-back vectors before the Rayleigh–Ritz step.
   int filter_degree = 32;
-  // Threads (0: every hardware thread): component_spectra's components below multilevel_limit, solved side by side,
+  // Threads (0: every hardware thread): component_spectra's components up to multilevel_limit, solved side by side,
   // and multilevel's filter (it works on blocks of 8 vectors, so at most count / 4 threads have work); the pairs are
   // the same for any number.
   size_t threads = 1;
@@ -127,9 +127,10 @@ struct ComponentSpectra {
 
 // The smallest eigenpairs of every connected component of `topology`, each from the rows and columns of
 // `laplacian` (built from the same welded vertices and triangles) that belong to it. Components above
-// settings.multilevel_limit vertices one after another, each with settings.threads for its filter; the others side by
-// side on up to settings.threads threads, larger first, `progress` told from the calling thread's only. A component's first
-// eigenvalue is 0 with a constant eigenvector; a component of one vertex has only that pair.
+// settings.multilevel_limit vertices (unless a method other than multilevel is forced) one after another, each with
+// settings.threads for its filter; the others side by side on up to settings.threads threads, larger first,
+// `progress` told from the calling thread's only. A component's first eigenvalue is 0 with a constant eigenvector; a
+// component of one vertex has only that pair.
 Status component_spectra(const CotangentLaplacian& laplacian, const WeldedTopology& topology, size_t count,
                          ComponentSpectra& out, const EigenSettings& settings = EigenSettings());
 

@@ -233,8 +233,9 @@ MorseBands refine_levels(const std::vector<double>& positions, const std::vector
   // Each vertex's lowest neighbouring μ: a vertex is on the boundary of a level τ when μ ≥ τ and that is below τ, so
   // the candidates of one window look only at the vertices that are for some τ in it (`band`, in the component's
   // order: the same boundaries, in the same order, as from every vertex of the component).
-  std::vector<double> lowest_neighbour(topology.welded_count(), INFINITY);
-  for (size_t w = 0; w < topology.welded_count(); ++w)
+  std::vector<double> lowest_neighbour(
+      settings.profile == ConcavityProfile::level_curves ? 0 : topology.welded_count(), INFINITY);
+  for (size_t w = 0; w < lowest_neighbour.size(); ++w)
     for (uint32_t i = adjacency.offset[w]; i < adjacency.offset[w + 1]; ++i)
       if (mu[adjacency.neighbour[i]] < lowest_neighbour[w]) lowest_neighbour[w] = mu[adjacency.neighbour[i]];
   std::vector<uint32_t> band;
